@@ -1,0 +1,106 @@
+#pragma once
+// The graph-based single-shot decoder of Schmalz & Angelopoulou, "Robust
+// Single-Shot Structured Light": watershed superpixels -> region adjacency
+// graph -> edge symbols and errors -> best-first decoding of stripe positions
+// -> sub-pixel stripe edges -> ray/light-plane triangulation.
+//
+// Every buffer is sized once in create() from the calibrated camera size and
+// the pattern; decode() performs no heap allocation. Stages live one per file
+// under pipeline/decoder/; docs/algorithm.md explains each decision.
+
+#include "pipeline/frame.hpp"
+#include "pipeline/pattern.hpp"
+#include "pipeline/rig.hpp"
+#include "pipeline/status.hpp"
+
+#include <opencv2/core.hpp>
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <span>
+
+namespace stria::pipeline {
+
+struct DecoderParams {
+    double t = 1.0 / 3.0;  // symbol threshold on the equalised colour change (eq. 6/7)
+    double alpha = 0.2;    // weight of the gradient error in E = Ematch + alpha * Egradient (eq. 9)
+    double A = 0.5;        // aggressiveness: edges with error above A are never followed
+    double beta = 255.0;   // scale of the position error Q (eq. 10), in colour units
+    // Camera colour crosstalk correction, applied AS GIVEN to every superpixel
+    // colour (BGR order in, BGR order out): c' = crosstalk * c. Pass the inverse
+    // of the measured mixing matrix.
+    cv::Matx33f crosstalk = cv::Matx33f::eye();
+    // Number of bad edges (error above A but below tokenErrorLimit) a decoding
+    // path may cross in a row; a good edge refills the bucket.
+    int tokenBucketSize = 2;
+    double tokenErrorLimit = 1.0;
+    // Connected decoded components with fewer superpixels are dropped as
+    // false positives (shadows, clutter).
+    int minComponentRegions = 6;
+    // An edge is a "null edge" (both regions on the same stripe) when its
+    // colour change is below this fraction of the larger of the two regions'
+    // channel ranges.
+    double nullEdgeRatio = 0.25;
+    // Gradient magnitudes below this (8-bit units) are flattened before the
+    // watershed, so flat stripe interiors form one basin instead of many.
+    int gradientFloor = 4;
+    // Capacities (0 = derive from the camera size). When a frame needs more,
+    // decode() decodes what fits and sets DecodeResult::truncated.
+    int maxSuperpixels = 0;  // default: pixels / 8
+    int maxGraphEdges = 0;   // default: 4 * maxSuperpixels
+    int maxPoints = 0;       // default: pixels / 2
+};
+
+struct ScanPoint {
+    cv::Vec3f position;  // mm, camera frame
+    cv::Point2f pixel;   // camera pixel: sub-pixel column u, row v
+    std::int32_t edge;   // pattern edge index
+};
+
+struct StageTimings {
+    double gradientMs = 0, watershedMs = 0, regionsMs = 0, graphMs = 0, edgesMs = 0, decodeMs = 0, depthMs = 0,
+           totalMs = 0;
+};
+
+struct DecodeResult {
+    std::span<const ScanPoint> points;  // valid until the next decode()
+    int superpixels = 0, graphEdges = 0, decodedRegions = 0;
+    bool truncated = false;  // a capacity was reached; decoded as far as it fitted
+    StageTimings timings;
+};
+
+struct DecoderWorkspace;  // pipeline/decoder/workspace.hpp
+
+class Decoder {
+public:
+    // Sizes every buffer once from the camera size in rig (the largest frame) and the pattern.
+    static Result<std::unique_ptr<Decoder>> create(const StripePattern& pattern, const RigModel& rig,
+                                                   const DecoderParams& params = {});
+    ~Decoder();
+    Decoder(const Decoder&) = delete;
+    Decoder& operator=(const Decoder&) = delete;
+
+    // frame: BGR8 or RGB8, exactly the calibrated camera size, else an error
+    // naming both sizes. Performs no heap allocation.
+    Result<DecodeResult> decode(const FrameView& frame);
+    // Depth (z, mm) of the last decode into a caller-owned CV_32FC1 of camera
+    // size; NaN where nothing was measured. Reallocates `depth` only if its
+    // size or type differ.
+    void fillDepthMap(cv::Mat& depth) const;
+    // Everything allocated by create(), excluding the input frame.
+    std::size_t workspaceBytes() const;
+
+    const DecoderParams& params() const;
+    // Superpixel label per pixel of the last decode (CV_32SC1 view into the
+    // workspace, valid until the next decode()); for tests and debugging.
+    cv::Mat labels() const;
+    // Pattern stripe index per superpixel of the last decode (-1 = undecoded).
+    std::span<const std::int32_t> regionStripes() const;
+
+private:
+    explicit Decoder(std::unique_ptr<DecoderWorkspace> workspace);
+    std::unique_ptr<DecoderWorkspace> ws_;
+};
+
+}  // namespace stria::pipeline
