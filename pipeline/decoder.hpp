@@ -27,29 +27,32 @@ struct DecoderParams {
     double alpha = 0.2;    // weight of the gradient error in E = Ematch + alpha * Egradient (eq. 9)
     double A = 0.5;        // aggressiveness: edges with error above A are never followed
     double beta = 255.0;   // scale of the position error Q (eq. 10), in colour units
-    // Camera colour crosstalk correction, applied AS GIVEN to every superpixel
-    // colour (BGR order in, BGR order out): c' = crosstalk * c. Pass the inverse
-    // of the measured mixing matrix.
+    // The camera's colour crosstalk as MEASURED (the mixing matrix, R G B order:
+    // observed = crosstalk * projected, rows sensor R G B, columns light R G B;
+    // the simulator's RenderSettings::crosstalk convention). The decoder applies
+    // its inverse to every superpixel colour and to the gradient it locates
+    // edges with; create() fails if it is singular.
     cv::Matx33f crosstalk = cv::Matx33f::eye();
-    // Number of bad edges (error above A but below tokenErrorLimit) a decoding
-    // path may cross in a row; a good edge refills the bucket.
+    // Token bucket: each edge with error below A adds a token (up to
+    // tokenBucketSize); an edge with error in [A, tokenErrorLimit) is followed
+    // only by spending one, so isolated bad edges are crossed, runs are not.
     int tokenBucketSize = 2;
     double tokenErrorLimit = 1.0;
     // Connected decoded components with fewer superpixels are dropped as
     // false positives (shadows, clutter).
     int minComponentRegions = 6;
-    // An edge is a "null edge" (both regions on the same stripe) when its
-    // colour change is below this fraction of the larger of the two regions'
-    // channel ranges.
+    // Null edges (fig. 6): an edge whose weight is below this fraction of the
+    // weight of the edge to the region's reference (the neighbour on the next
+    // stripe it was decoded from) may join two regions of the same stripe.
     double nullEdgeRatio = 0.25;
     // Gradient magnitudes below this (8-bit units) are flattened before the
     // watershed, so flat stripe interiors form one basin instead of many.
     int gradientFloor = 4;
     // Capacities (0 = derive from the camera size). When a frame needs more,
     // decode() decodes what fits and sets DecodeResult::truncated.
-    int maxSuperpixels = 0;  // default: pixels / 8
-    int maxGraphEdges = 0;   // default: 4 * maxSuperpixels
-    int maxPoints = 0;       // default: pixels / 2
+    int maxSuperpixels = 0;  // default: pixels / 16
+    int maxGraphEdges = 0;   // default: 3 * maxSuperpixels (a planar graph has fewer)
+    int maxPoints = 0;       // default: pixels / 6
 };
 
 struct ScanPoint {
@@ -95,8 +98,8 @@ public:
     // Superpixel label per pixel of the last decode (CV_32SC1 view into the
     // workspace, valid until the next decode()); for tests and debugging.
     cv::Mat labels() const;
-    // Pattern stripe index per superpixel of the last decode (-1 = undecoded).
-    std::span<const std::int32_t> regionStripes() const;
+    // Pattern stripe of superpixel `label` in the last decode (-1 = undecoded).
+    int regionStripe(int label) const;
 
 private:
     explicit Decoder(std::unique_ptr<DecoderWorkspace> workspace);

@@ -1,0 +1,208 @@
+// Decoder: sizes the workspace once, then runs the stages in order on each frame.
+#include "pipeline/decoder/workspace.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <string>
+
+namespace stria::pipeline {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double millisecondsSince(Clock::time_point& start)
+{
+    const Clock::time_point now = Clock::now();
+    const double ms = std::chrono::duration<double, std::milli>(now - start).count();
+    start = now;
+    return ms;
+}
+
+template <typename T>
+std::unique_ptr<T[]> allocate(std::size_t count, std::size_t& bytes)
+{
+    bytes += count * sizeof(T);
+    return std::make_unique<T[]>(count);
+}
+
+std::string sizeName(int w, int h) { return std::to_string(w) + "x" + std::to_string(h); }
+
+Status validateParams(const DecoderParams& p)
+{
+    if (!(p.t > 0 && p.t < 1)) return Status::error("decoder parameter t is " + std::to_string(p.t) + ": it must be in (0, 1)");
+    if (!(p.alpha >= 0)) return Status::error("decoder parameter alpha is " + std::to_string(p.alpha) + ": it must be >= 0");
+    if (!(p.A > 0)) return Status::error("decoder parameter A is " + std::to_string(p.A) + ": it must be > 0");
+    if (!(p.beta > 0)) return Status::error("decoder parameter beta is " + std::to_string(p.beta) + ": it must be > 0");
+    if (p.tokenBucketSize < 0 || p.minComponentRegions < 1 || p.gradientFloor < 0 || p.maxSuperpixels < 0 ||
+        p.maxGraphEdges < 0 || p.maxPoints < 0 || !(p.nullEdgeRatio >= 0))
+        return Status::error("decoder parameters: tokenBucketSize, gradientFloor, nullEdgeRatio and the capacities "
+                             "must be >= 0 and minComponentRegions >= 1");
+    return Status::ok();
+}
+
+// Unit image direction in which the projector column increases: the epipolar
+// line through the image centre (towards or away from the projector's image
+// in the camera), oriented with the light planes' normals.
+cv::Vec2f primaryDirection(const RigModel& rig, const StripePattern& pattern)
+{
+    const LensModel& cam = rig.camera();
+    const cv::Vec3d e = cam.K * rig.projectorCentreInCamera();
+    const double cx = (cam.width - 1) / 2.0, cy = (cam.height - 1) / 2.0;
+    cv::Vec2d d(e[0] - e[2] * cx, e[1] - e[2] * cy);
+    if (cv::norm(d) < 1e-12) d = {1, 0};
+    d /= cv::norm(d);
+    const Plane plane = rig.lightPlaneForColumn(pattern.edgeColumn(pattern.edgeCount() / 2));
+    const double along = plane.normal[0] * d[0] / cam.K(0, 0) + plane.normal[1] * d[1] / cam.K(1, 1);
+    if (along < 0) d = -d;
+    return {static_cast<float>(d[0]), static_cast<float>(d[1])};
+}
+
+}  // namespace
+
+cv::Vec3d DecoderWorkspace::rayThroughPixel(double u, double v) const
+{
+    const double gx = std::clamp(u / rayGridStep, 0.0, rayGridWidth - 1.000001);
+    const double gy = std::clamp(v / rayGridStep, 0.0, rayGridHeight - 1.000001);
+    const int x0 = static_cast<int>(gx), y0 = static_cast<int>(gy);
+    const double fx = gx - x0, fy = gy - y0;
+    const cv::Vec2f* r = rayGrid.get() + y0 * rayGridWidth + x0;
+    const cv::Vec2d top = cv::Vec2d(r[0]) * (1 - fx) + cv::Vec2d(r[1]) * fx;
+    const cv::Vec2d bottom = cv::Vec2d(r[rayGridWidth]) * (1 - fx) + cv::Vec2d(r[rayGridWidth + 1]) * fx;
+    const cv::Vec2d xn = top * (1 - fy) + bottom * fy;
+    return {xn[0], xn[1], 1.0};
+}
+
+
+Decoder::Decoder(std::unique_ptr<DecoderWorkspace> workspace) : ws_(std::move(workspace)) {}
+Decoder::~Decoder() = default;
+
+Result<std::unique_ptr<Decoder>> Decoder::create(const StripePattern& pattern, const RigModel& rig,
+                                                 const DecoderParams& params)
+{
+    if (Status s = validateParams(params); !s) return s;
+    const LensModel& cam = rig.camera();
+    if (pattern.projectorColumnsUsed() > rig.projector().width)
+        return Status::error("the pattern needs " + std::to_string(pattern.projectorColumnsUsed()) +
+                             " projector columns but the calibrated projector is only " +
+                             std::to_string(rig.projector().width) + " wide");
+    if (pattern.stripeCount() > std::numeric_limits<std::int16_t>::max())
+        return Status::error("the pattern has " + std::to_string(pattern.stripeCount()) +
+                             " stripes: the decoder supports at most 32767");
+    const cv::Matx33d mixing = params.crosstalk;
+    if (std::abs(cv::determinant(mixing)) < 1e-6)
+        return Status::error("the crosstalk matrix is singular (determinant " +
+                             std::to_string(cv::determinant(mixing)) + "): it cannot be corrected");
+
+    auto ws = std::make_unique<DecoderWorkspace>(pattern, rig, params);
+    const int w = cam.width, h = cam.height;
+    const std::size_t n = static_cast<std::size_t>(w) * h;
+    ws->width = w;
+    ws->height = h;
+    ws->colorCorrection = cv::Matx33f(mixing.inv());
+    ws->primary = primaryDirection(rig, pattern);
+    ws->maxRegions = params.maxSuperpixels > 0 ? params.maxSuperpixels : std::max<int>(16, static_cast<int>(n / 16));
+    ws->maxEdges = params.maxGraphEdges > 0 ? params.maxGraphEdges : 3 * ws->maxRegions;
+    ws->maxPoints = params.maxPoints > 0 ? params.maxPoints : std::max<int>(16, static_cast<int>(n / 6));
+
+    std::size_t& bytes = ws->allocatedBytes;
+    ws->gradient = allocate<std::uint8_t>(n, bytes);
+    ws->labels = allocate<std::int32_t>(n, bytes);
+    ws->pixelOrder = allocate<std::int32_t>(n, bytes);
+    ws->scratch = allocate<std::int32_t>(n, bytes);
+    ws->regions = allocate<Region>(ws->maxRegions, bytes);
+    ws->edges = allocate<GraphEdge>(ws->maxEdges, bytes);
+    ws->adjacency = allocate<std::int32_t>(2 * static_cast<std::size_t>(ws->maxEdges), bytes);
+    ws->edgeOrder = allocate<std::int32_t>(ws->maxEdges, bytes);
+    ws->open = allocate<OpenEntry>(ws->maxEdges, bytes);
+    ws->candidates = allocate<std::int32_t>(pattern.edgeCount(), bytes);
+    ws->pathVertices = allocate<std::int32_t>(2 * (pattern.window() + 1) + 1, bytes);
+    ws->componentSize = allocate<std::int32_t>(ws->maxRegions, bytes);
+    ws->points = allocate<ScanPoint>(ws->maxPoints, bytes);
+
+    ws->lightPlanes = allocate<Plane>(pattern.edgeCount(), bytes);
+    for (int k = 0; k < pattern.edgeCount(); ++k) ws->lightPlanes[k] = rig.lightPlaneForColumn(pattern.edgeColumn(k));
+    ws->rayGridWidth = std::max(2, (w - 1 + ws->rayGridStep - 1) / ws->rayGridStep + 1);
+    ws->rayGridHeight = std::max(2, (h - 1 + ws->rayGridStep - 1) / ws->rayGridStep + 1);
+    ws->rayGrid = allocate<cv::Vec2f>(static_cast<std::size_t>(ws->rayGridWidth) * ws->rayGridHeight, bytes);
+    for (int gy = 0; gy < ws->rayGridHeight; ++gy)
+        for (int gx = 0; gx < ws->rayGridWidth; ++gx)
+            ws->rayGrid[gy * ws->rayGridWidth + gx] =
+                cv::Vec2f(cam.undistortPixel({static_cast<double>(gx * ws->rayGridStep),
+                                               static_cast<double>(gy * ws->rayGridStep)}));
+    bytes += sizeof(DecoderWorkspace);
+    return std::unique_ptr<Decoder>(new Decoder(std::move(ws)));
+}
+
+Result<DecodeResult> Decoder::decode(const FrameView& frame)
+{
+    DecoderWorkspace& ws = *ws_;
+    if (frame.empty()) return Status::error("decode: the frame is empty");
+    if (frame.format != PixelFormat::Bgr8 && frame.format != PixelFormat::Rgb8)
+        return Status::error(std::string("decode: the frame is ") + pixelFormatName(frame.format) +
+                             ", the decoder needs BGR8 or RGB8");
+    if (frame.width != ws.width || frame.height != ws.height)
+        return Status::error("decode: the frame is " + sizeName(frame.width, frame.height) +
+                             " but the camera is calibrated for " + sizeName(ws.width, ws.height));
+    if (frame.stride < 3 * static_cast<std::ptrdiff_t>(frame.width))
+        return Status::error("decode: the frame's stride " + std::to_string(frame.stride) + " is below 3 x width");
+    ws.frame = frame;
+    ws.rgbOffset = frame.format == PixelFormat::Bgr8 ? std::array<int, 3>{2, 1, 0} : std::array<int, 3>{0, 1, 2};
+    ws.truncated = false;
+
+    DecodeResult result;
+    StageTimings& t = result.timings;
+    const Clock::time_point begin = Clock::now();
+    Clock::time_point lap = begin;
+    computeGradient(ws);
+    t.gradientMs = millisecondsSince(lap);
+    computeWatershed(ws);
+    t.watershedMs = millisecondsSince(lap);
+    computeRegions(ws);
+    t.regionsMs = millisecondsSince(lap);
+    buildGraph(ws);
+    t.graphMs = millisecondsSince(lap);
+    computeEdgeFeatures(ws);
+    t.edgesMs = millisecondsSince(lap);
+    decodeStripes(ws);
+    t.decodeMs = millisecondsSince(lap);
+    computePoints(ws);
+    t.depthMs = millisecondsSince(lap);
+    t.totalMs = std::chrono::duration<double, std::milli>(lap - begin).count();
+
+    result.points = std::span<const ScanPoint>(ws.points.get(), static_cast<std::size_t>(ws.pointCount));
+    result.superpixels = ws.regionCount;
+    result.graphEdges = ws.edgeCount;
+    result.decodedRegions = ws.decodedRegions;
+    result.truncated = ws.truncated;
+    ws.frame = {};
+    return result;
+}
+
+void Decoder::fillDepthMap(cv::Mat& depth) const
+{
+    const DecoderWorkspace& ws = *ws_;
+    depth.create(ws.height, ws.width, CV_32FC1);
+    for (int y = 0; y < ws.height; ++y) {
+        float* row = depth.ptr<float>(y);
+        std::fill(row, row + ws.width, std::numeric_limits<float>::quiet_NaN());
+    }
+    for (int i = 0; i < ws.pointCount; ++i) {
+        const ScanPoint& p = ws.points[i];
+        const int x = static_cast<int>(std::lround(p.pixel.x)), y = static_cast<int>(std::lround(p.pixel.y));
+        if (x >= 0 && x < ws.width && y >= 0 && y < ws.height) depth.at<float>(y, x) = p.position[2];
+    }
+}
+
+std::size_t Decoder::workspaceBytes() const { return ws_->allocatedBytes; }
+const DecoderParams& Decoder::params() const { return ws_->params; }
+
+cv::Mat Decoder::labels() const { return cv::Mat(ws_->height, ws_->width, CV_32SC1, ws_->labels.get()); }
+
+int Decoder::regionStripe(int label) const
+{
+    return label >= 0 && label < ws_->regionCount ? ws_->regions[label].stripe : -1;
+}
+
+}  // namespace stria::pipeline

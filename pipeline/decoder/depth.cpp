@@ -1,0 +1,85 @@
+// Stage 7: 3D points (section 5 of the paper).
+//
+// Along every image row, each pair of neighbouring pixels whose regions were
+// decoded as consecutive stripes k, k+1 marks stripe edge k. The edge is
+// located with sub-pixel precision as the peak of the colour gradient along
+// the row: the gradient is projected onto the edge's expected symbol (each
+// channel divided by the regions' range, eq. 1), so texture that changes other
+// channels does not pull the peak, and a parabola through the strongest
+// half-pixel difference within +-2 px and its two neighbours gives the peak.
+// The point is where the camera ray through (u, row) meets edge k's light plane.
+#include "pipeline/decoder/workspace.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace stria::pipeline {
+namespace {
+
+constexpr int kSearchRadius = 2;
+
+}  // namespace
+
+void computePoints(DecoderWorkspace& ws)
+{
+    const int w = ws.width, h = ws.height;
+    const Region* regions = ws.regions.get();
+    const std::int32_t* labels = ws.labels.get();
+    const cv::Matx33f& m = ws.colorCorrection;
+    ws.pointCount = 0;
+
+    for (int y = 0; y < h; ++y) {
+        const std::int32_t* label = labels + static_cast<std::ptrdiff_t>(y) * w;
+        const std::uint8_t* row = ws.frame.row(y);
+        for (int x = 0; x + 1 < w; ++x) {
+            if (label[x] == label[x + 1]) continue;
+            const Region& left = regions[label[x]];
+            const Region& right = regions[label[x + 1]];
+            if (left.stripe < 0 || right.stripe < 0 || std::abs(left.stripe - right.stripe) != 1) continue;
+            const int edge = std::min(left.stripe, right.stripe);
+            const SymbolCode symbol = ws.pattern.edgeSymbol(edge);
+            // Weights per channel: expected sign / range, walking left to right.
+            const float orientation = right.stripe > left.stripe ? 1.0f : -1.0f;
+            cv::Vec3f weight;
+            for (int c = 0; c < 3; ++c)
+                weight[c] = orientation * static_cast<float>(symbolChannel(symbol, c)) /
+                            std::max(0.5f * (left.range[c] + right.range[c]), 1.0f);
+            // Projected gradient at half-pixel position i + 0.5.
+            auto gradientAt = [&](int i) {
+                const std::uint8_t* p = row + 3 * i;
+                const cv::Vec3f raw(static_cast<float>(p[3 + ws.rgbOffset[0]] - p[ws.rgbOffset[0]]),
+                                    static_cast<float>(p[3 + ws.rgbOffset[1]] - p[ws.rgbOffset[1]]),
+                                    static_cast<float>(p[3 + ws.rgbOffset[2]] - p[ws.rgbOffset[2]]));
+                return weight.dot(m * raw);
+            };
+            int peak = x;
+            float peakValue = gradientAt(x);
+            for (int i = std::max(x - kSearchRadius, 0); i <= std::min(x + kSearchRadius, w - 2); ++i) {
+                const float g = gradientAt(i);
+                if (g > peakValue) {
+                    peak = i;
+                    peakValue = g;
+                }
+            }
+            if (!(peakValue > 0)) continue;
+            float offset = 0;
+            if (peak > 0 && peak + 1 < w - 1) {
+                const float before = gradientAt(peak - 1), after = gradientAt(peak + 1);
+                const float curvature = before - 2 * peakValue + after;
+                if (curvature < 0) offset = std::clamp(0.5f * (before - after) / curvature, -0.5f, 0.5f);
+            }
+            const double u = peak + 0.5 + offset;
+            const auto point = RigModel::intersectRay(ws.rayThroughPixel(u, y), ws.lightPlanes[edge]);
+            if (!point) continue;
+            if (ws.pointCount == ws.maxPoints) {
+                ws.truncated = true;
+                return;
+            }
+            ws.points[ws.pointCount++] = {cv::Vec3f(static_cast<float>((*point)[0]), static_cast<float>((*point)[1]),
+                                                    static_cast<float>((*point)[2])),
+                                          cv::Point2f(static_cast<float>(u), static_cast<float>(y)), edge};
+        }
+    }
+}
+
+}  // namespace stria::pipeline

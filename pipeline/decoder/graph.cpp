@@ -1,0 +1,115 @@
+// Stage 4: the region adjacency graph.
+//
+// One vertex per superpixel, one edge per pair of superpixels that touch
+// (4-neighbourhood, so the graph is planar and has at most 3V - 6 edges). Each
+// border pixel pair adds to its edge: the count, the unit normal pointing from
+// the smaller label to the larger one (their sum is the border's chord, used
+// for the direction in fig. 5) and the image gradient split into the primary
+// direction (across the stripes) and the secondary one (along them) for eq. 8.
+// Edges are found through a short per-vertex list (degrees are ~6), then laid
+// out as compressed incidence lists for the traversal.
+#include "pipeline/decoder/workspace.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace stria::pipeline {
+namespace {
+
+std::int32_t findOrAddEdge(DecoderWorkspace& ws, std::int32_t a, std::int32_t b)
+{
+    Region& ra = ws.regions[a];
+    for (std::int32_t e = ra.edgeListHead; e >= 0; e = ws.edges[e].nextOfA)
+        if (ws.edges[e].b == b) return e;
+    if (ws.edgeCount == ws.maxEdges) {
+        ws.truncated = true;
+        return -1;
+    }
+    const std::int32_t e = ws.edgeCount++;
+    GraphEdge& edge = ws.edges[e];
+    edge = GraphEdge{};
+    edge.a = a;
+    edge.b = b;
+    edge.nextOfA = ra.edgeListHead;
+    ra.edgeListHead = e;
+    return e;
+}
+
+}  // namespace
+
+void buildGraph(DecoderWorkspace& ws)
+{
+    const int w = ws.width, h = ws.height;
+    const std::int32_t* label = ws.labels.get();
+    const float px = ws.primary[0], py = ws.primary[1];
+    ws.edgeCount = 0;
+
+    // Adds border pair (p, q); q is right of p (horizontal) or below it.
+    auto addPair = [&](int x, int y, bool horizontal) {
+        const std::int32_t p = y * w + x, q = horizontal ? p + 1 : p + w;
+        std::int32_t a = label[p], b = label[q];
+        int sign = 1;  // +1: the normal from a to b points to +x / +y
+        if (a > b) {
+            std::swap(a, b);
+            sign = -1;
+        }
+        const std::int32_t e = findOrAddEdge(ws, a, b);
+        if (e < 0) return;
+        GraphEdge& edge = ws.edges[e];
+        ++edge.borderCount;
+        (horizontal ? edge.normalX : edge.normalY) += sign;
+
+        // Image gradient at the middle of the pair, summed over channels.
+        const std::uint8_t* r0 = ws.frame.row(y);
+        float dp = 0, ds = 0;
+        for (int c = 0; c < 3; ++c) {
+            float gx, gy;
+            if (horizontal) {
+                const std::uint8_t* up = ws.frame.row(std::max(y - 1, 0));
+                const std::uint8_t* down = ws.frame.row(std::min(y + 1, h - 1));
+                gx = static_cast<float>(r0[3 * (x + 1) + c] - r0[3 * x + c]);
+                gy = 0.25f * static_cast<float>(down[3 * x + c] - up[3 * x + c] + down[3 * (x + 1) + c] -
+                                                up[3 * (x + 1) + c]);
+            } else {
+                const std::uint8_t* r1 = ws.frame.row(y + 1);
+                const int xl = 3 * std::max(x - 1, 0) + c, xr = 3 * std::min(x + 1, w - 1) + c;
+                gy = static_cast<float>(r1[3 * x + c] - r0[3 * x + c]);
+                gx = 0.25f * static_cast<float>(r0[xr] - r0[xl] + r1[xr] - r1[xl]);
+            }
+            dp += std::abs(gx * px + gy * py);
+            ds += std::abs(-gx * py + gy * px);
+        }
+        edge.primaryGradient += dp;
+        edge.secondaryGradient += ds;
+    };
+
+    for (int y = 0; y < h; ++y) {
+        const std::int32_t* row = label + static_cast<std::ptrdiff_t>(y) * w;
+        for (int x = 0; x + 1 < w; ++x)
+            if (row[x] != row[x + 1]) addPair(x, y, true);
+        if (y + 1 < h)
+            for (int x = 0; x < w; ++x)
+                if (row[x] != row[x + w]) addPair(x, y, false);
+    }
+
+    // Incidence lists (CSR).
+    Region* regions = ws.regions.get();
+    for (int e = 0; e < ws.edgeCount; ++e) {
+        ++regions[ws.edges[e].a].degree;
+        ++regions[ws.edges[e].b].degree;
+    }
+    std::int32_t offset = 0;
+    for (int r = 0; r < ws.regionCount; ++r) {
+        regions[r].adjacencyBegin = offset;
+        offset += regions[r].degree;
+        regions[r].degree = 0;
+    }
+    for (int e = 0; e < ws.edgeCount; ++e) {
+        for (std::int32_t v : {ws.edges[e].a, ws.edges[e].b}) {
+            Region& r = regions[v];
+            ws.adjacency[r.adjacencyBegin + r.degree++] = e;
+        }
+    }
+}
+
+}  // namespace stria::pipeline

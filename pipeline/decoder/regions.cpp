@@ -1,0 +1,61 @@
+// Stage 3: superpixel colours and centroids.
+//
+// The colour of a superpixel is the per-channel median of its pixels
+// (marginal ordering, a rank filter robust to noise and to the blurred pixels
+// at its border), then corrected for camera crosstalk. Pixels are grouped by
+// label with a counting sort into pixelOrder (reusing the watershed's order
+// buffer); each channel's median is found by selection (nth_element) on a
+// byte copy in the scratch buffer, which is linear and allocation-free.
+#include "pipeline/decoder/workspace.hpp"
+
+#include <algorithm>
+
+namespace stria::pipeline {
+
+void computeRegions(DecoderWorkspace& ws)
+{
+    const int w = ws.width, n = ws.width * ws.height, count = ws.regionCount;
+    const std::int32_t* label = ws.labels.get();
+    Region* regions = ws.regions.get();
+    for (int r = 0; r < count; ++r) regions[r] = Region{};
+
+    for (int p = 0; p < n; ++p) ++regions[label[p]].pixelCount;
+    std::int32_t offset = 0;
+    for (int r = 0; r < count; ++r) {
+        regions[r].firstPixel = offset;
+        offset += regions[r].pixelCount;
+        regions[r].adjacencyBegin = regions[r].firstPixel;  // fill cursor for the sort below
+    }
+    std::int32_t* order = ws.pixelOrder.get();
+    for (int p = 0; p < n; ++p) order[regions[label[p]].adjacencyBegin++] = p;
+
+    auto* bytes = reinterpret_cast<std::uint8_t*>(ws.scratch.get());
+    const cv::Matx33f& m = ws.colorCorrection;
+    for (int r = 0; r < count; ++r) {
+        Region& region = regions[r];
+        const std::int32_t* pixels = order + region.firstPixel;
+        const int size = region.pixelCount;
+        long long sx = 0, sy = 0;
+        for (int i = 0; i < size; ++i) {
+            sx += pixels[i] % w;
+            sy += pixels[i] / w;
+        }
+        region.centroidX = static_cast<float>(static_cast<double>(sx) / size);
+        region.centroidY = static_cast<float>(static_cast<double>(sy) / size);
+        cv::Vec3f median;
+        for (int c = 0; c < 3; ++c) {
+            const int off = ws.rgbOffset[c];
+            for (int i = 0; i < size; ++i) {
+                const int p = pixels[i];
+                bytes[i] = ws.frame.row(p / w)[3 * (p % w) + off];
+            }
+            std::nth_element(bytes, bytes + size / 2, bytes + size);
+            median[c] = bytes[size / 2];
+        }
+        const cv::Vec3f corrected = m * median;
+        region.color = {corrected[0], corrected[1], corrected[2]};
+        region.adjacencyBegin = 0;
+    }
+}
+
+}  // namespace stria::pipeline

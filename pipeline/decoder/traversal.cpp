@@ -1,0 +1,293 @@
+// Stage 6: decoding stripe positions on the region adjacency graph (section 4.3).
+//
+// Passes, each started from the best unused edge (edges sorted by error):
+//  1. Unique path: the seed edge's optimal symbol gives the candidate
+//     positions (StripePattern::edgesWithSymbol). The path grows at either end
+//     by the lowest-error qualifying edge (right direction, error < A for the
+//     symbol some candidate needs there); candidates needing another symbol
+//     drop out, until one remains (at the latest after window() edges).
+//  2. Best-first propagation from the path's regions with a heap keyed by edge
+//     error. A neighbour is a stripe further (forward/backward edge, expected
+//     pattern symbol, possibly not the optimal one) or the same stripe (null
+//     edge, fig. 6: weak edge, and the virtual edge from the reference region
+//     has the same symbol). Edges above A pass only on a token from the
+//     bucket, which good edges refill. A region reached again with another
+//     stripe keeps the one with the lower position error Q (eq. 10).
+// Afterwards components (regions decoded by one pass) with fewer than
+// minComponentRegions regions are dropped as false positives.
+#include "pipeline/decoder/workspace.hpp"
+
+#include <algorithm>
+
+namespace stria::pipeline {
+namespace {
+
+struct Hypothesis {
+    float error = 0;
+    float positionError = 0;
+    int stripe = -1;
+    int reference = -1;
+};
+
+EdgeDirection directionFrom(const GraphEdge& edge, int from)
+{
+    return from == edge.a ? edge.direction : static_cast<EdgeDirection>(-static_cast<int>(edge.direction));
+}
+
+int otherEnd(const GraphEdge& edge, int from) { return from == edge.a ? edge.b : edge.a; }
+
+// Pattern symbol seen when walking from stripe `from` to the neighbouring stripe `to`.
+SymbolCode stripeSymbol(const StripePattern& pattern, int from, int to)
+{
+    return to > from ? pattern.edgeSymbol(from) : reversedSymbol(pattern.edgeSymbol(to));
+}
+
+class Traversal {
+public:
+    explicit Traversal(DecoderWorkspace& ws)
+        : ws_(ws), t_(static_cast<float>(ws.params.t)), alpha_(static_cast<float>(ws.params.alpha)),
+          A_(static_cast<float>(ws.params.A)), beta_(static_cast<float>(ws.params.beta))
+    {
+    }
+
+    void run()
+    {
+        Region* regions = ws_.regions.get();
+        for (int r = 0; r < ws_.regionCount; ++r) {
+            regions[r].stripe = -1;
+            regions[r].component = -1;
+        }
+        int seeds = 0;
+        for (int e = 0; e < ws_.edgeCount; ++e)
+            if (ws_.edges[e].direction != EdgeDirection::Parallel && ws_.edges[e].bestError < A_)
+                ws_.edgeOrder[seeds++] = e;
+        std::sort(ws_.edgeOrder.get(), ws_.edgeOrder.get() + seeds, [&](int l, int r) {
+            return ws_.edges[l].bestError < ws_.edges[r].bestError ||
+                   (ws_.edges[l].bestError == ws_.edges[r].bestError && l < r);
+        });
+        ws_.passCount = 0;
+        for (int i = 0; i < seeds; ++i) {
+            const GraphEdge& edge = ws_.edges[ws_.edgeOrder[i]];
+            if (regions[edge.a].stripe >= 0 || regions[edge.b].stripe >= 0) continue;
+            if (!findUniquePath(ws_.edgeOrder[i])) continue;
+            propagate();
+            ++ws_.passCount;
+        }
+        rejectSmallComponents();
+    }
+
+private:
+    float edgeError(int from, int to, const GraphEdge& edge, SymbolCode symbol, float* positionError) const
+    {
+        const EqualizedChange change = equalizedChange(ws_, from, to);
+        const float match = matchError(change.c, symbol, t_);
+        if (positionError) *positionError = beta_ * match / std::max(change.weight, 1.0f) + edge.gradientError;
+        return match + alpha_ * edge.gradientError;
+    }
+
+    // Step 1. Returns true when the path was unique and its regions are assigned.
+    bool findUniquePath(int seedEdge)
+    {
+        const StripePattern& pattern = ws_.pattern;
+        const GraphEdge& seed = ws_.edges[seedEdge];
+        const bool forward = seed.direction == EdgeDirection::Forward;
+        std::int32_t* path = ws_.pathVertices.get();
+        const int maxPath = pattern.window() + 1;
+        // The path is path[begin, end), left to right; room to grow either way.
+        int begin = maxPath, end = maxPath;
+        path[end++] = forward ? seed.a : seed.b;
+        path[end++] = forward ? seed.b : seed.a;
+        const SymbolCode symbol = forward ? seed.bestSymbol : reversedSymbol(seed.bestSymbol);
+        // candidates: pattern edge index of the path's first edge.
+        int count = 0;
+        for (int p : pattern.edgesWithSymbol(symbol)) ws_.candidates[count++] = p;
+
+        while (count > 1 && end - begin <= pattern.window()) {
+            float bestError = A_;
+            int bestRegion = -1;
+            bool bestLeft = false;
+            SymbolCode bestSymbol = kNullSymbol;
+            for (bool left : {true, false}) {
+                const int endRegion = left ? path[begin] : path[end - 1];
+                const Region& r = ws_.regions[endRegion];
+                for (int i = 0; i < r.degree; ++i) {
+                    const GraphEdge& edge = ws_.edges[ws_.adjacency[r.adjacencyBegin + i]];
+                    if (directionFrom(edge, endRegion) != (left ? EdgeDirection::Backward : EdgeDirection::Forward))
+                        continue;
+                    const int next = otherEnd(edge, endRegion);
+                    if (ws_.regions[next].stripe >= 0 || std::find(path + begin, path + end, next) != path + end)
+                        continue;
+                    SymbolCode tried = kNullSymbol;  // each required symbol once per edge
+                    for (int c = 0; c < count; ++c) {
+                        const int stripeHere = ws_.candidates[c] + (left ? 0 : end - begin - 1);
+                        const int stripeNext = stripeHere + (left ? -1 : 1);
+                        if (stripeNext < 0 || stripeNext >= pattern.stripeCount()) continue;
+                        const SymbolCode needed = stripeSymbol(pattern, stripeHere, stripeNext);
+                        if (needed == tried) continue;
+                        tried = needed;
+                        const float error = edgeError(endRegion, next, edge, needed, nullptr);
+                        if (error < bestError) {
+                            bestError = error;
+                            bestRegion = next;
+                            bestLeft = left;
+                            bestSymbol = needed;
+                        }
+                    }
+                }
+            }
+            if (bestRegion < 0) return false;
+            int kept = 0;
+            for (int c = 0; c < count; ++c) {
+                const int stripeHere = ws_.candidates[c] + (bestLeft ? 0 : end - begin - 1);
+                const int stripeNext = stripeHere + (bestLeft ? -1 : 1);
+                if (stripeNext < 0 || stripeNext >= pattern.stripeCount()) continue;
+                if (stripeSymbol(pattern, stripeHere, stripeNext) == bestSymbol)
+                    ws_.candidates[kept++] = ws_.candidates[c] - (bestLeft ? 1 : 0);
+            }
+            count = kept;
+            if (bestLeft) path[--begin] = bestRegion;
+            else path[end++] = bestRegion;
+        }
+        if (count != 1) return false;
+
+        const int first = ws_.candidates[0];
+        const int pass = ws_.passCount;
+        const int length = end - begin;
+        for (int i = 0; i < length; ++i) {
+            Region& r = ws_.regions[path[begin + i]];
+            r.stripe = first + i;
+            r.reference = path[begin + (i > 0 ? i - 1 : 1)];
+            r.component = pass;
+            r.tokens = std::min(length - 1, ws_.params.tokenBucketSize);
+            r.positionError = 1e30f;
+        }
+        // Q of each path region: its best path edge.
+        for (int i = 0; i + 1 < length; ++i) {
+            const int l = path[begin + i], r = path[begin + i + 1];
+            for (int k = 0; k < ws_.regions[l].degree; ++k) {
+                const GraphEdge& edge = ws_.edges[ws_.adjacency[ws_.regions[l].adjacencyBegin + k]];
+                if (otherEnd(edge, l) != r) continue;
+                float q = 0;
+                edgeError(l, r, edge, stripeSymbol(ws_.pattern, first + i, first + i + 1), &q);
+                ws_.regions[l].positionError = std::min(ws_.regions[l].positionError, q);
+                ws_.regions[r].positionError = std::min(ws_.regions[r].positionError, q);
+            }
+        }
+        ws_.openCount = 0;
+        for (int i = 0; i < length; ++i) pushNeighbours(path[begin + i]);
+        return true;
+    }
+
+    // The best way to reach `to` from decoded region `from` over `edge`, if any.
+    Hypothesis bestHypothesis(int from, int to, const GraphEdge& edge) const
+    {
+        const StripePattern& pattern = ws_.pattern;
+        const Region& f = ws_.regions[from];
+        Hypothesis best;
+        best.error = 1e30f;
+        const EdgeDirection dir = directionFrom(edge, from);
+        if (dir != EdgeDirection::Parallel) {
+            const int stripe = f.stripe + (dir == EdgeDirection::Forward ? 1 : -1);
+            if (stripe >= 0 && stripe < pattern.stripeCount()) {
+                float q = 0;
+                const float error = edgeError(from, to, edge, stripeSymbol(pattern, f.stripe, stripe), &q);
+                best = {error, q, stripe, from};
+            }
+        }
+        // Null edge (fig. 6): weak relative to the reference edge, and the
+        // (possibly virtual) edge reference -> `to` has the reference edge's symbol.
+        if (f.reference >= 0) {
+            const Region& ref = ws_.regions[f.reference];
+            float referenceWeight = 0;
+            for (int c = 0; c < 3; ++c) referenceWeight = std::max(referenceWeight, std::abs(f.color[c] - ref.color[c]));
+            if (edge.weight < ws_.params.nullEdgeRatio * referenceWeight && ref.stripe >= 0 &&
+                std::abs(ref.stripe - f.stripe) == 1) {
+                const SymbolCode expected = stripeSymbol(pattern, ref.stripe, f.stripe);
+                const EqualizedChange change = equalizedChange(ws_, f.reference, to);
+                if (optimalSymbol(change.c, t_) == expected) {
+                    const float error = matchError(change.c, expected, t_);
+                    if (error < best.error)
+                        best = {error, beta_ * error / std::max(change.weight, 1.0f), f.stripe, f.reference};
+                }
+            }
+        }
+        return best;
+    }
+
+    void pushNeighbours(int from)
+    {
+        const Region& f = ws_.regions[from];
+        for (int i = 0; i < f.degree; ++i) {
+            const GraphEdge& edge = ws_.edges[ws_.adjacency[f.adjacencyBegin + i]];
+            const int to = otherEnd(edge, from);
+            if (ws_.regions[to].stripe == f.stripe) continue;
+            const Hypothesis h = bestHypothesis(from, to, edge);
+            if (h.stripe < 0 || h.stripe == ws_.regions[to].stripe) continue;
+            int tokens = f.tokens;
+            if (h.error < A_) {
+                tokens = std::min(tokens + 1, ws_.params.tokenBucketSize);
+            } else if (tokens > 0 && h.error < ws_.params.tokenErrorLimit) {
+                --tokens;
+            } else {
+                continue;
+            }
+            if (ws_.openCount == ws_.maxEdges) {
+                ws_.truncated = true;
+                return;
+            }
+            ws_.open[ws_.openCount++] = {h.error, h.positionError, to, h.reference, static_cast<std::int16_t>(h.stripe),
+                                         static_cast<std::int16_t>(tokens)};
+            std::push_heap(ws_.open.get(), ws_.open.get() + ws_.openCount, later);
+        }
+    }
+
+    static bool later(const OpenEntry& l, const OpenEntry& r)
+    {
+        return l.error > r.error || (l.error == r.error && l.region > r.region);
+    }
+
+    // Step 2.
+    void propagate()
+    {
+        while (ws_.openCount > 0) {
+            std::pop_heap(ws_.open.get(), ws_.open.get() + ws_.openCount, later);
+            const OpenEntry entry = ws_.open[--ws_.openCount];
+            Region& r = ws_.regions[entry.region];
+            if (r.stripe == entry.stripe) {
+                r.positionError = std::min(r.positionError, entry.positionError);
+                continue;
+            }
+            if (r.stripe >= 0 && r.positionError <= entry.positionError) continue;
+            r.stripe = entry.stripe;
+            r.positionError = entry.positionError;
+            r.reference = entry.reference;
+            r.tokens = entry.tokens;
+            r.component = ws_.passCount;
+            pushNeighbours(entry.region);
+        }
+    }
+
+    void rejectSmallComponents()
+    {
+        std::int32_t* size = ws_.componentSize.get();
+        std::fill(size, size + ws_.passCount, 0);
+        Region* regions = ws_.regions.get();
+        for (int r = 0; r < ws_.regionCount; ++r)
+            if (regions[r].stripe >= 0) ++size[regions[r].component];
+        ws_.decodedRegions = 0;
+        for (int r = 0; r < ws_.regionCount; ++r) {
+            if (regions[r].stripe < 0) continue;
+            if (size[regions[r].component] < ws_.params.minComponentRegions) regions[r].stripe = -1;
+            else ++ws_.decodedRegions;
+        }
+    }
+
+    DecoderWorkspace& ws_;
+    const float t_, alpha_, A_, beta_;
+};
+
+}  // namespace
+
+void decodeStripes(DecoderWorkspace& ws) { Traversal(ws).run(); }
+
+}  // namespace stria::pipeline

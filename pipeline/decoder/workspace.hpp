@@ -1,0 +1,135 @@
+#pragma once
+// The decoder's state: every buffer sized once by Decoder::create() and reused
+// by each decode(). One stage per file in this folder; each stage reads and
+// writes the workspace and nothing else, so the order in decoder.cpp is the
+// whole data flow:
+//   gradient.cpp   colour gradient magnitude (8 bit)
+//   watershed.cpp  superpixel labels (bucket-queue flooding)
+//   regions.cpp    per-superpixel median colour, crosstalk-corrected; centroid
+//   graph.cpp      region adjacency graph with border statistics
+//   edges.cpp      edge weight, symbol, errors (eq. 1-9), direction (fig. 5)
+//   traversal.cpp  stripe positions by unique paths + best-first growth
+//   depth.cpp      sub-pixel stripe edges per row, ray/light-plane points
+
+#include "pipeline/decoder.hpp"
+
+#include <array>
+#include <cstdint>
+#include <memory>
+
+namespace stria::pipeline {
+
+struct Region {
+    std::array<float, 3> color{};     // median R G B after crosstalk correction
+    std::array<float, 3> range{};     // eq. 1: largest |change| per channel over all neighbours
+    float centroidX = 0, centroidY = 0;
+    std::int32_t pixelCount = 0;
+    std::int32_t firstPixel = 0;      // into Workspace::pixelOrder (label-sorted)
+    std::int32_t adjacencyBegin = 0;  // incident edges: Workspace::adjacency[begin, begin + degree)
+    std::int32_t degree = 0;
+    std::int32_t edgeListHead = -1;   // graph construction: edges whose smaller label is this one
+    // Decoding state.
+    std::int32_t stripe = -1;     // pattern stripe index, -1 = undecoded
+    std::int32_t reference = -1;  // decoded neighbour across a real stripe edge (null-edge test, fig. 6)
+    std::int32_t component = -1;  // decoding pass that assigned the stripe
+    float positionError = 0;      // eq. 10 for the assigned stripe
+    std::int32_t tokens = 0;      // token bucket level on the path that reached this region
+};
+
+// Direction of an edge seen from its first region `a` (fig. 5).
+enum class EdgeDirection : std::int8_t { Backward = -1, Parallel = 0, Forward = 1 };
+
+struct GraphEdge {
+    std::int32_t a = 0, b = 0;  // a < b
+    std::int32_t borderCount = 0;
+    // Sum of unit border normals pointing from a to b (pixel pairs: +-x for a
+    // horizontal pair, +-y for a vertical one): the chord of the border line.
+    std::int32_t normalX = 0, normalY = 0;
+    float primaryGradient = 0, secondaryGradient = 0;  // eq. 8 sums over the border pixels
+    float weight = 0;        // eq. 3: L-inf of the raw colour change
+    float gradientError = 0; // eq. 8
+    float bestError = 0;     // eq. 9 for the optimal symbol
+    SymbolCode bestSymbol = kNullSymbol;  // eq. 7, seen from a to b
+    EdgeDirection direction = EdgeDirection::Parallel;
+    std::int32_t nextOfA = -1;  // graph construction: next edge in a's list
+};
+
+// A pending visit in the best-first propagation: region `region` is stripe
+// `stripe`, reached by an edge with this error.
+struct OpenEntry {
+    float error;          // eq. 9 for the hypothesised symbol (heap key)
+    float positionError;  // eq. 10 term of that edge
+    std::int32_t region;
+    std::int32_t reference;  // the region's reference for later null-edge tests
+    std::int16_t stripe;
+    std::int16_t tokens;     // token bucket level after this edge
+};
+
+struct DecoderWorkspace {
+    DecoderWorkspace(const StripePattern& pattern, const RigModel& rig, const DecoderParams& params)
+        : pattern(pattern), rig(rig), params(params)
+    {
+    }
+
+    StripePattern pattern;
+    RigModel rig;
+    DecoderParams params;
+    int width = 0, height = 0;
+    cv::Matx33f colorCorrection;  // inverse of params.crosstalk (R G B)
+    cv::Vec2f primary{1, 0};      // unit image direction of increasing projector column (epipolar)
+
+    // Per pixel.
+    std::unique_ptr<std::uint8_t[]> gradient;
+    std::unique_ptr<std::int32_t[]> labels;
+    std::unique_ptr<std::int32_t[]> pixelOrder;  // by gradient level (watershed), then by label (regions)
+    std::unique_ptr<std::int32_t[]> scratch;     // watershed FIFO links, then median selection bytes
+
+    // Graph.
+    int maxRegions = 0, maxEdges = 0, maxPoints = 0;
+    std::unique_ptr<Region[]> regions;
+    std::unique_ptr<GraphEdge[]> edges;
+    std::unique_ptr<std::int32_t[]> adjacency;  // 2 * maxEdges incident edge indices (CSR)
+    std::unique_ptr<std::int32_t[]> edgeOrder;  // edges sorted by bestError (seeding order)
+    std::unique_ptr<OpenEntry[]> open;          // heap, maxEdges entries
+    int openCount = 0;
+    std::unique_ptr<std::int32_t[]> candidates;  // seeding: candidate pattern positions (edgeCount)
+    std::unique_ptr<std::int32_t[]> pathVertices;  // seeding: the path, window + 1 regions
+    std::unique_ptr<std::int32_t[]> componentSize;  // per pass (<= maxRegions)
+
+    // Geometry.
+    std::unique_ptr<Plane[]> lightPlanes;  // per pattern edge
+    int rayGridStep = 4, rayGridWidth = 0, rayGridHeight = 0;
+    std::unique_ptr<cv::Vec2f[]> rayGrid;  // undistorted normalised coordinates every rayGridStep px
+
+    // Output.
+    std::unique_ptr<ScanPoint[]> points;
+
+    // Per-frame counts.
+    int regionCount = 0, edgeCount = 0, pointCount = 0, passCount = 0, decodedRegions = 0;
+    bool truncated = false;
+    FrameView frame;
+    std::array<int, 3> rgbOffset{2, 1, 0};  // byte offset of R, G, B within a pixel
+
+    std::size_t allocatedBytes = 0;  // by create(): Decoder::workspaceBytes()
+    cv::Vec3d rayThroughPixel(double u, double v) const;
+};
+
+// The stages, in order.
+void computeGradient(DecoderWorkspace& ws);
+void computeWatershed(DecoderWorkspace& ws);
+void computeRegions(DecoderWorkspace& ws);
+void buildGraph(DecoderWorkspace& ws);
+void computeEdgeFeatures(DecoderWorkspace& ws);
+void decodeStripes(DecoderWorkspace& ws);
+void computePoints(DecoderWorkspace& ws);
+
+// Shared by the edge and traversal stages (eq. 4-7).
+struct EqualizedChange {
+    std::array<float, 3> c{};  // R G B, max |c| = 1
+    float weight = 0;          // L-inf of the raw change
+};
+EqualizedChange equalizedChange(const DecoderWorkspace& ws, int from, int to);
+float matchError(const std::array<float, 3>& c, SymbolCode symbol, float t);
+SymbolCode optimalSymbol(const std::array<float, 3>& c, float t);
+
+}  // namespace stria::pipeline
