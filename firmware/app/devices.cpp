@@ -11,7 +11,9 @@
 #include "hal/gpiod/gpiod_button.hpp"
 #include "hal/gpiod/gpiod_light.hpp"
 #endif
-// STRIA_HAVE_LIBCAMERA (hal/libcamera/): its branch goes beside v4l2 in openDevices().
+#ifdef STRIA_HAVE_LIBCAMERA
+#include "hal/libcamera/libcamera_camera.hpp"
+#endif
 
 namespace stria::firmware {
 namespace {
@@ -77,6 +79,12 @@ Result<Devices> openDevices(const BoardConfig& board, const std::optional<std::s
 #ifdef STRIA_HAVE_V4L2
     } else if (cam.backend == "v4l2") {
         auto camera = hal::V4l2Camera::open(cam.device);
+        if (!camera) return camera.status();
+        devices.camera = std::move(*camera);
+#endif
+#ifdef STRIA_HAVE_LIBCAMERA
+    } else if (cam.backend == "libcamera") {
+        auto camera = hal::LibcameraCamera::open(cam.device);
         if (!camera) return camera.status();
         devices.camera = std::move(*camera);
 #endif
