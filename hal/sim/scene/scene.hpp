@@ -49,6 +49,8 @@ const char* sceneName(SceneKind kind);
 std::optional<SceneKind> sceneFromName(std::string_view name);
 // "uniform", "checker", "coloured", "photo"
 const char* albedoName(Albedo albedo);
+// The albedo a scene is shown with unless one is asked for (relief: coloured).
+Albedo defaultAlbedo(SceneKind kind);
 std::optional<Albedo> albedoFromName(std::string_view name);
 
 // Surface reflectance as a function of 2-D surface coordinates in mm.
@@ -89,19 +91,29 @@ struct Cylinder {  // axis = local z, |local z| <= halfLength; inside = seen fro
     bool inside = false;
     Texture texture;
 };
-// Surface centre + a*x + b*y + height(a, b)*z for |a| <= halfSize[0],
-// |b| <= halfSize[1], with heightMin <= height <= heightMax. Intersected by
-// marching (step marchStepMm along the ray) and bisection, so the surface's
-// features must be wider than the march step along a ray.
+// Surface centre + a*x + b*y + height(a, b)*z over a grid of heights
+// (bilinear between samples), |a| <= halfSize[0], |b| <= halfSize[1].
+// Rays walk the grid cell by cell (skipping blocks whose height range they
+// miss) and meet each bilinear cell exactly (a quadratic in t).
 struct HeightField {
+    static constexpr int kBlock = 8;  // cells per block side
     cv::Vec3d centre;
     cv::Matx33d axes = cv::Matx33d::eye();
-    cv::Vec2d halfSize{1, 1};
+    cv::Mat heights;         // CV_64FC1, row j at b = -halfSize[1] + j * spacingMm, column i likewise in a
+    double spacingMm = 1;
+    cv::Vec2d halfSize{0, 0};
     double heightMin = 0;
     double heightMax = 0;
-    double marchStepMm = 0.1;
-    std::function<double(double a, double b)> height;
+    cv::Mat cellRange;       // CV_64FC2: (min, max) height of each cell (rows-1 x cols-1)
+    cv::Mat blockRange;      // CV_64FC2: (min, max) height of each block of kBlock x kBlock cells
     Texture texture;
+
+    // Samples `height` on a grid of `spacingMm` covering |a| <= halfSize[0], |b| <= halfSize[1].
+    static HeightField sample(const cv::Vec3d& centre, const cv::Matx33d& axes, const cv::Vec2d& halfSize,
+                              double spacingMm, const std::function<double(double a, double b)>& height,
+                              const Texture& texture);
+    // Bilinear height at (a, b); (a, b) must lie inside the grid.
+    double heightAt(double a, double b) const;
 };
 
 struct Hit {
@@ -154,7 +166,8 @@ struct Rendering {
     cv::Mat depth;            // CV_32FC1, z in mm of the surface seen at each pixel centre, NaN = nothing
     cv::Mat projectorColumn;  // CV_32FC1, projector x (OpenCV px) that lights that surface point, NaN if none
     cv::Mat lit;              // CV_8UC1, 1 = the projector sees that point (not in shadow), 0 otherwise
-    cv::Mat radiance;         // CV_32FC3, the noise-free linear sensor signal in digits (scratch, reused)
+    cv::Mat radiance;         // CV_32FC3, B G R noise-free sensor signal in digits, after camera blur (reused)
+    cv::Mat raw;              // CV_8UC1, the RGGB mosaic when RenderSettings::bayer (reused)
 };
 
 class SceneRenderer {
