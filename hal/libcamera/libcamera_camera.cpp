@@ -227,8 +227,13 @@ Result<CapturedFrame> LibcameraCamera::capture(std::chrono::milliseconds timeout
         frame.view = FrameView{mappings_[request->cookie()].pixels, config_.width, config_.height, stride_,
                                PixelFormat::Bgr8};
         frame.sequence = buffer->metadata().sequence;
-        frame.timestampNs = applied.sensorTimestampNs.value_or(std::int64_t(buffer->metadata().timestamp));
         frame.exposureUs = applied.exposureUs.value_or(0.0);
+        // Pipelines stamp the start of readout of the first row (Raspberry
+        // Pi: unicam's start of frame), which ends that row's exposure. Erring
+        // early makes the scan loop drop a frame rather than accept one
+        // exposed partly before the LED was on.
+        const std::int64_t stampNs = applied.sensorTimestampNs.value_or(std::int64_t(buffer->metadata().timestamp));
+        frame.timestampNs = stampNs - std::int64_t(applied.exposureUs.value_or(config_.exposureUs) * 1000);
         frame.analogueGain = applied.analogueGain.value_or(0.0);
         return frame;
     }

@@ -142,6 +142,12 @@ Status V4l2Camera::setFormat(const CameraConfig& config)
                              " " + std::to_string(format.fmt.pix.width) + "x" + std::to_string(format.fmt.pix.height) +
                              " when asked for " + fourccName(pixelFormat_) + " " + std::to_string(config.width) + "x" +
                              std::to_string(config.height) + ": pick a size the camera supports (v4l2-ctl --list-formats-ext)");
+    // The frame period bounds the sensor readout (see frameStartNs()).
+    v4l2_streamparm parm{};
+    parm.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+    const v4l2_fract& period = parm.parm.capture.timeperframe;
+    const bool knowsPeriod = device_->ioctl(VIDIOC_G_PARM, &parm) == 0 && period.denominator > 0;
+    frameIntervalNs_ = knowsPeriod ? std::int64_t(period.numerator) * 1'000'000'000 / period.denominator : 0;
     const std::uint32_t minLine = std::uint32_t(config.width) * (pixelFormat_ == V4L2_PIX_FMT_YUYV ? 2 : 3);
     width_ = config.width;
     height_ = config.height;
@@ -268,6 +274,17 @@ void V4l2Camera::stop()
     streaming_ = false;
 }
 
+std::int64_t V4l2Camera::exposureStartNs(const v4l2_buffer& buffer) const
+{
+    const std::int64_t stampNs = std::int64_t(buffer.timestamp.tv_sec) * 1'000'000'000 + buffer.timestamp.tv_usec * 1000;
+    if ((buffer.flags & V4L2_BUF_FLAG_TSTAMP_SRC_MASK) != V4L2_BUF_FLAG_TSTAMP_SRC_EOF) return stampNs;
+    // Stamped when the last row arrived: the first row started exposing at
+    // most one frame period (readout) plus the exposure earlier. Erring early
+    // makes the scan loop drop a frame rather than accept one exposed partly
+    // before the LED was on.
+    return stampNs - frameIntervalNs_ - std::int64_t(exposureUs_ * 1000);
+}
+
 Result<CapturedFrame> V4l2Camera::capture(std::chrono::milliseconds timeout)
 {
     if (!streaming_) return Status::error("camera '" + device_->path() + "': capture() before start()");
@@ -313,7 +330,7 @@ Result<CapturedFrame> V4l2Camera::capture(std::chrono::milliseconds timeout)
         CapturedFrame frame;
         frame.view = FrameView{bgr_.data(), width_, height_, std::ptrdiff_t(width_) * 3, PixelFormat::Bgr8};
         frame.sequence = buffer.sequence;
-        frame.timestampNs = std::int64_t(buffer.timestamp.tv_sec) * 1'000'000'000 + buffer.timestamp.tv_usec * 1000;
+        frame.timestampNs = exposureStartNs(buffer);
         frame.exposureUs = exposureUs_;
         frame.analogueGain = analogueGain_;
         return frame;

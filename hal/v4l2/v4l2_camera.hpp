@@ -7,6 +7,8 @@
 #include "hal/camera.hpp"
 #include "hal/v4l2/v4l2_device.hpp"
 
+#include <linux/videodev2.h>
+
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -48,6 +50,9 @@ private:
     Status setControl(std::uint32_t id, const char* name, std::int32_t value, std::int32_t* applied);
     Status mapBuffers(int count);
     void releaseBuffers();
+    // CLOCK_MONOTONIC start of exposure of the first row (UVC stamps the
+    // start of exposure; other drivers the end of the frame).
+    std::int64_t exposureStartNs(const v4l2_buffer& buffer) const;
 
     std::unique_ptr<V4l2Device> device_;
     std::uint32_t pixelFormat_;
@@ -56,6 +61,7 @@ private:
     std::vector<std::string> missingControls_;
     int width_ = 0, height_ = 0;
     std::uint32_t bytesPerLine_ = 0, imageBytes_ = 0;
+    std::int64_t frameIntervalNs_ = 0;
     double exposureUs_ = 0, analogueGain_ = 0;
     bool streaming_ = false;
 };

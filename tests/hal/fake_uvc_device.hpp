@@ -27,6 +27,7 @@ struct FakeControl {
 struct FakeFrame {
     std::vector<std::uint8_t> bytes;
     bool corrupted = false;  // V4L2_BUF_FLAG_ERROR (USB packet loss)
+    bool stampedAtEnd = false;  // timestamp taken at the end of the frame, not the start of exposure
 };
 
 class FakeUvcDevice final : public V4l2Device {
@@ -73,6 +74,7 @@ public:
             return 0;
         }
         case VIDIOC_S_FMT: return setFormat(static_cast<v4l2_format*>(arg)->fmt.pix);
+        case VIDIOC_G_PARM: static_cast<v4l2_streamparm*>(arg)->parm.capture.timeperframe = {1, 30}; return 0;
         case VIDIOC_QUERYCTRL: {
             auto* query = static_cast<v4l2_queryctrl*>(arg);
             auto it = controls_.find(query->id);
@@ -176,9 +178,10 @@ private:
         std::memcpy(buffer.memory.data(), frame.bytes.data(), std::min(frame.bytes.size(), buffer.memory.size()));
         out->index = index;
         out->bytesused = std::uint32_t(frame.bytes.size());
-        out->flags = frame.corrupted ? V4L2_BUF_FLAG_ERROR : 0;
+        out->flags = V4L2_BUF_FLAG_TIMESTAMP_MONOTONIC | (frame.corrupted ? V4L2_BUF_FLAG_ERROR : 0) |
+                     (frame.stampedAtEnd ? V4L2_BUF_FLAG_TSTAMP_SRC_EOF : V4L2_BUF_FLAG_TSTAMP_SRC_SOE);
         out->sequence = sequence_++;
-        out->timestamp = {100, std::int64_t(out->sequence) * 33333};
+        out->timestamp = {100, std::int64_t(out->sequence) * 33333};  // 30 fps from t = 100 s
         return 0;
     }
 

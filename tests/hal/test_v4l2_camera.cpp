@@ -188,6 +188,24 @@ TEST(V4l2Camera, BuffersAreRequeuedAndCorruptFramesDropped)
     }
 }
 
+TEST(V4l2Camera, TimestampIsTheStartOfExposure)
+{
+    auto [device, camera] = openFake({kYuyv});
+    CameraConfig config{4, 2};
+    config.exposureUs = 5'000;
+    ASSERT_TRUE(camera->configure(config).isOk());
+    ASSERT_TRUE(camera->start().isOk());
+    device->pushFrame({kYuyvFrame});                      // UVC: stamped at the start of exposure
+    device->pushFrame({kYuyvFrame, false, true});         // stamped when the frame ended
+    auto first = camera->capture(100ms);
+    ASSERT_TRUE(first.isOk()) << first.message();
+    EXPECT_EQ(first->timestampNs, 100'000'000'000);
+    auto second = camera->capture(100ms);
+    ASSERT_TRUE(second.isOk()) << second.message();
+    // 100 s + 33.333 ms, minus a frame period (1/30 s) and the 5 ms exposure.
+    EXPECT_EQ(second->timestampNs, 100'033'333'000 - 33'333'333 - 5'000'000);
+}
+
 TEST(V4l2Camera, NoFrameGivesTimeoutError)
 {
     auto [device, camera] = openFake({kYuyv});
