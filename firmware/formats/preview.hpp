@@ -8,7 +8,8 @@ namespace stria::firmware {
 
 // depth: CV_32FC1 in mm, NaN (or <= 0) = no data. When nearMm >= farMm the
 // range is chosen robustly from the data (2nd..98th percentile), so a few
-// outliers do not wash out the colours. Returns CV_8UC3 BGR for writePng.
+// outliers do not wash out the colours. Returns CV_8UC3 BGR for writePng:
+// the depth map, with a 44-pixel strip below it holding the scale bar.
 cv::Mat depthPreview(const cv::Mat& depth, double nearMm = 0.0, double farMm = 0.0);
 
 }  // namespace stria::firmware

@@ -36,8 +36,8 @@ Status validateParams(const DecoderParams& p)
     if (!(p.A > 0)) return Status::error("decoder parameter A is " + std::to_string(p.A) + ": it must be > 0");
     if (!(p.beta > 0)) return Status::error("decoder parameter beta is " + std::to_string(p.beta) + ": it must be > 0");
     if (p.tokenBucketSize < 0 || p.minComponentRegions < 1 || p.gradientFloor < 0 || p.maxSuperpixels < 0 ||
-        p.maxGraphEdges < 0 || p.maxPoints < 0 || !(p.nullEdgeRatio >= 0))
-        return Status::error("decoder parameters: tokenBucketSize, gradientFloor, nullEdgeRatio and the capacities "
+        p.maxGraphEdges < 0 || p.maxPoints < 0 || !(p.nullEdgeRatio >= 0) || !(p.noiseFloorFactor >= 0))
+        return Status::error("decoder parameters: tokenBucketSize, gradientFloor, noiseFloorFactor, nullEdgeRatio and the capacities "
                              "must be >= 0 and minComponentRegions >= 1");
     return Status::ok();
 }

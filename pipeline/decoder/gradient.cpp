@@ -9,6 +9,8 @@
 #include "pipeline/decoder/workspace.hpp"
 
 #include <algorithm>
+#include <array>
+#include <cmath>
 #include <cstdlib>
 
 namespace stria::pipeline {
@@ -16,7 +18,9 @@ namespace stria::pipeline {
 void computeGradient(DecoderWorkspace& ws)
 {
     const int w = ws.width, h = ws.height;
-    const int floor = ws.params.gradientFloor;
+    // Along the stripes: image y when the primary direction is closer to x.
+    const bool alongY = std::abs(ws.primary[0]) >= std::abs(ws.primary[1]);
+    std::array<int, 256> along{};
     for (int y = 0; y < h; ++y) {
         const std::uint8_t* up = ws.frame.row(std::max(y - 1, 0));
         const std::uint8_t* row = ws.frame.row(y);
@@ -24,15 +28,25 @@ void computeGradient(DecoderWorkspace& ws)
         std::uint8_t* out = ws.gradient.get() + static_cast<std::ptrdiff_t>(y) * w;
         for (int x = 0; x < w; ++x) {
             const int left = 3 * std::max(x - 1, 0), right = 3 * std::min(x + 1, w - 1), here = 3 * x;
-            int best = 0;
+            int best = 0, bestAlong = 0;
             for (int c = 0; c < 3; ++c) {
-                const int g = std::abs(row[right + c] - row[left + c]) + std::abs(down[here + c] - up[here + c]);
-                best = std::max(best, g);
+                const int gx = std::abs(row[right + c] - row[left + c]), gy = std::abs(down[here + c] - up[here + c]);
+                best = std::max(best, gx + gy);
+                bestAlong = std::max(bestAlong, alongY ? gy : gx);
             }
-            best = (best + 1) / 2;
-            out[x] = static_cast<std::uint8_t>(best <= floor ? 0 : std::min(best, 255));
+            ++along[std::min(bestAlong, 255)];
+            out[x] = static_cast<std::uint8_t>(std::min((best + 1) / 2, 255));
         }
     }
+
+    const int n = w * h;
+    int median = 0;
+    for (int seen = along[0]; 2 * seen < n; seen += along[++median]) {
+    }
+    const int floor = std::max(ws.params.gradientFloor,
+                               static_cast<int>(std::lround(ws.params.noiseFloorFactor * median)));
+    for (int p = 0; p < n; ++p)
+        if (ws.gradient[p] <= floor) ws.gradient[p] = 0;
 }
 
 }  // namespace stria::pipeline
