@@ -1,0 +1,338 @@
+// The scene simulator against closed-form geometry, and its light, noise,
+// determinism and ground-truth counting.
+#include "firmware/formats/calibration_file.hpp"
+#include "firmware/formats/pattern_file.hpp"
+#include "hal/sim/scene/scene.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace stria::hal::sim {
+namespace {
+
+// The desktop rig with clearly visible distortion on both devices.
+SimRig distortedRig()
+{
+    SimRig rig = desktopRig();
+    pipeline::LensModel camera = rig.rig.camera(), projector = rig.rig.projector();
+    camera.distortion = {-0.2, 0.1, 0.001, -0.0008, 0.01};
+    projector.distortion = {0.05, -0.02, 0.0005, 0.0003, 0};
+    rig.rig = *pipeline::RigModel::create(camera, projector, rig.rig.R(), rig.rig.T());
+    return rig;
+}
+
+TEST(SceneRenderer, PlaneDepthAndProjectorColumnMatchClosedForm)
+{
+    const SimRig rig = distortedRig();
+    const Scene scene = makeScene(SceneKind::TiltedPlane, rig, Albedo::Uniform, 1);
+    ASSERT_EQ(scene.planes.size(), 1u);
+    const PlaneSurface& plane = scene.planes[0];
+    const cv::Vec3d normal(plane.axes(0, 2), plane.axes(1, 2), plane.axes(2, 2));
+
+    Rendering out;
+    ASSERT_TRUE(SceneRenderer(rig).render(scene, RenderSettings{}, out));
+    double maxDepthError = 0, maxColumnError = 0;
+    int compared = 0, litMismatches = 0;
+    for (int y = 0; y < out.depth.rows; y += 3) {
+        for (int x = 0; x < out.depth.cols; x += 3) {
+            // Closed form: the camera ray (distortion removed by the rig
+            // model) meets the plane; the point projects into the projector.
+            const cv::Vec3d ray = rig.rig.camera().rayThroughPixel({double(x), double(y)});
+            const cv::Vec3d point = ray * (normal.dot(plane.centre) / normal.dot(ray));
+            const cv::Vec2d projected = rig.rig.projector().project(rig.rig.cameraToProjector(point));
+            const bool inside = projected[0] >= -0.5 && projected[0] <= 1023.5 && projected[1] >= -0.5 &&
+                                projected[1] <= 767.5;
+            maxDepthError = std::max(maxDepthError, std::abs(out.depth.at<float>(y, x) - point[2]));
+            if (inside != (out.lit.at<std::uint8_t>(y, x) == 1)) ++litMismatches;
+            if (!inside) continue;
+            maxColumnError = std::max(maxColumnError, std::abs(out.projectorColumn.at<float>(y, x) - projected[0]));
+            ++compared;
+        }
+    }
+    EXPECT_GT(compared, 40000);
+    EXPECT_EQ(litMismatches, 0);
+    EXPECT_LT(maxDepthError, 1e-3);   // mm (float storage: ~6e-5 mm at 1 m)
+    EXPECT_LT(maxColumnError, 1e-3);  // projector px
+}
+
+// Whether the segment p -> q passes through the sphere.
+bool segmentHitsSphere(const cv::Vec3d& p, const cv::Vec3d& q, const Sphere& s)
+{
+    const cv::Vec3d d = q - p;
+    const double t = std::clamp((s.centre - p).dot(d) / d.dot(d), 0.0, 1.0);
+    return cv::norm(p + t * d - s.centre) < s.radius;
+}
+
+TEST(SceneRenderer, SphereCastsTheShadowClosedFormPredicts)
+{
+    const SimRig rig = desktopRig();
+    const Scene scene = makeScene(SceneKind::SphereBeforeWall, rig, Albedo::Uniform, 1);
+    ASSERT_EQ(scene.spheres.size(), 1u);
+    const Sphere& sphere = scene.spheres[0];
+    const double wallZ = scene.planes[0].centre[2];
+    const cv::Vec3d projector = rig.rig.projectorCentreInCamera();
+
+    Rendering out;
+    ASSERT_TRUE(SceneRenderer(rig).render(scene, RenderSettings{}, out));
+    int wallShadow = 0, sphereShadow = 0, mismatches = 0;
+    for (int y = 0; y < out.depth.rows; ++y) {
+        for (int x = 0; x < out.depth.cols; ++x) {
+            const cv::Vec3d ray = rig.rig.camera().rayThroughPixel({double(x), double(y)});
+            // Nearest of sphere and wall along the ray.
+            const double b = ray.dot(sphere.centre), a = ray.dot(ray);
+            const double disc = b * b - a * (sphere.centre.dot(sphere.centre) - sphere.radius * sphere.radius);
+            const bool onSphere = disc >= 0;
+            const cv::Vec3d point = onSphere ? ray * ((b - std::sqrt(disc)) / a) : ray * wallZ;
+            const cv::Vec2d uv = rig.rig.projector().project(rig.rig.cameraToProjector(point));
+            const bool inside = uv[0] >= -0.5 && uv[0] <= 1023.5 && uv[1] >= -0.5 && uv[1] <= 767.5;
+            bool shadow;
+            if (onSphere) {
+                shadow = (point - sphere.centre).dot(projector - point) <= 0;  // faces away from the projector
+                sphereShadow += shadow && inside;
+            } else {
+                shadow = segmentHitsSphere(point, projector, sphere);
+                wallShadow += shadow && inside;
+            }
+            const bool lit = inside && !shadow;
+            mismatches += lit != (out.lit.at<std::uint8_t>(y, x) == 1);
+        }
+    }
+    EXPECT_GT(wallShadow, 30000);   // the sphere's shadow on the wall, left of the sphere
+    EXPECT_GT(sphereShadow, 2000);  // the crescent of the sphere turned away from the projector
+    EXPECT_LE(mismatches, 2);       // boundary pixels within rounding of the closed form
+    // Shadowed pixels are dark: only ambient light reaches them.
+    const cv::Mat shadowMask = (out.lit == 0) & (out.depth == out.depth);
+    const cv::Mat litMask = out.lit == 1;
+    EXPECT_LT(cv::mean(out.image, shadowMask)[1], 15.0);
+    EXPECT_GT(cv::mean(out.image, litMask)[1], 60.0);
+}
+
+// Mean absolute difference between horizontally adjacent pixels.
+double horizontalVariation(const cv::Mat& image)
+{
+    cv::Mat diff;
+    cv::absdiff(image.colRange(1, image.cols), image.colRange(0, image.cols - 1), diff);
+    const cv::Scalar m = cv::mean(diff);
+    return (m[0] + m[1] + m[2]) / 3;
+}
+
+TEST(SceneRenderer, LedOffLeavesOnlyAmbientLightAndNoStripes)
+{
+    const SimRig rig = desktopRig();
+    const Scene scene = makeScene(SceneKind::TiltedPlane, rig, Albedo::Uniform, 1);
+    const SceneRenderer renderer(rig);
+    RenderSettings settings;
+    settings.ambient = 0.3;
+    Rendering on, off;
+    ASSERT_TRUE(renderer.render(scene, settings, on));
+    settings.projectorOn = false;
+    ASSERT_TRUE(renderer.render(scene, settings, off));
+    EXPECT_GT(horizontalVariation(on.image), 10.0);
+    EXPECT_LT(horizontalVariation(off.image), 0.5);
+    EXPECT_EQ(cv::countNonZero(off.lit), 0);
+    EXPECT_EQ(cv::countNonZero(off.projectorColumn == off.projectorColumn), 0);  // all NaN
+    EXPECT_EQ(idealEdgeCrossings(off, rig.pattern), 0);
+    // Ambient only: 0.8 reflectance * 0.3 * 255 = 61 digits everywhere.
+    EXPECT_NEAR(cv::mean(off.image)[1], 61.2, 1.0);
+}
+
+// Standard deviation of (noisy - clean) over pixels well away from clipping.
+double noiseSigma(const Rendering& clean, const Rendering& noisy)
+{
+    double sum = 0, sum2 = 0;
+    long n = 0;
+    for (int y = 0; y < clean.image.rows; ++y)
+        for (int x = 0; x < clean.image.cols; ++x)
+            for (int c = 0; c < 3; ++c) {
+                const int v = clean.image.at<cv::Vec3b>(y, x)[c];
+                if (v < 50 || v > 205) continue;
+                const double d = noisy.image.at<cv::Vec3b>(y, x)[c] - v;
+                sum += d;
+                sum2 += d * d;
+                ++n;
+            }
+    return std::sqrt(sum2 / n - (sum / n) * (sum / n));
+}
+
+TEST(SceneRenderer, NoiseHasTheRequestedSigma)
+{
+    const SimRig rig = desktopRig();
+    const Scene scene = makeScene(SceneKind::TiltedPlane, rig, Albedo::Uniform, 1);
+    const SceneRenderer renderer(rig);
+    RenderSettings settings;
+    settings.contrast = 0.5;
+    settings.ambient = 0.3;
+    Rendering clean, noisy;
+    ASSERT_TRUE(renderer.render(scene, settings, clean));
+    for (double sigma : {2.0, 8.0, 16.0}) {
+        settings.noiseSigma = sigma;
+        ASSERT_TRUE(renderer.render(scene, settings, noisy));
+        // The clean image is quantised too: (noisy - clean) has sigma^2 + 2/12.
+        EXPECT_NEAR(noiseSigma(clean, noisy), std::sqrt(sigma * sigma + 1.0 / 6), 0.1 * sigma) << "sigma " << sigma;
+    }
+}
+
+TEST(SceneRenderer, ShotNoiseVarianceFollowsTheSignal)
+{
+    const SimRig rig = desktopRig();
+    const Scene scene = makeScene(SceneKind::TiltedPlane, rig, Albedo::Uniform, 1);
+    const SceneRenderer renderer(rig);
+    RenderSettings settings;
+    settings.ambient = 0.3;
+    settings.contrast = 0.5;
+    Rendering clean, noisy;
+    ASSERT_TRUE(renderer.render(scene, settings, clean));
+    settings.shotNoise = 0.5;
+    ASSERT_TRUE(renderer.render(scene, settings, noisy));
+    double measured = 0, predicted = 0;
+    long n = 0;
+    for (int y = 0; y < clean.image.rows; ++y)
+        for (int x = 0; x < clean.image.cols; ++x) {
+            const int v = clean.image.at<cv::Vec3b>(y, x)[1];
+            if (v < 50 || v > 205) continue;
+            const double d = noisy.image.at<cv::Vec3b>(y, x)[1] - v;
+            measured += d * d;
+            predicted += 0.5 * v + 1.0 / 6;
+            ++n;
+        }
+    ASSERT_GT(n, 10000);
+    EXPECT_NEAR(measured / predicted, 1.0, 0.1);
+}
+
+TEST(SceneRenderer, DeterministicForASeed)
+{
+    const SimRig rig = desktopRig();
+    const Scene a = makeScene(SceneKind::Clutter, rig, Albedo::Photo, 7);
+    const Scene b = makeScene(SceneKind::Clutter, rig, Albedo::Photo, 7);
+    const SceneRenderer renderer(rig);
+    RenderSettings settings;
+    settings.noiseSigma = 4;
+    settings.seed = 11;
+    Rendering first, second, otherSeed;
+    ASSERT_TRUE(renderer.render(a, settings, first));
+    ASSERT_TRUE(renderer.render(b, settings, second));
+    EXPECT_EQ(cv::norm(first.image, second.image, cv::NORM_INF), 0.0);
+    EXPECT_EQ(cv::countNonZero(first.depth != second.depth), cv::countNonZero(first.depth != first.depth));  // NaNs only
+    settings.seed = 12;
+    ASSERT_TRUE(renderer.render(a, settings, otherSeed));
+    const cv::Mat differs = (first.image != otherSeed.image);
+    EXPECT_GT(cv::countNonZero(differs.reshape(1)), 0.5 * differs.total() * 3);
+    // The scene seed moves the objects.
+    const Scene moved = makeScene(SceneKind::Clutter, rig, Albedo::Photo, 8);
+    EXPECT_NE(moved.spheres[0].centre, a.spheres[0].centre);
+}
+
+TEST(SceneRenderer, ReusesTheOutputBuffers)
+{
+    const SimRig rig = desktopRig();
+    const Scene scene = makeScene(SceneKind::TiltedPlane, rig, Albedo::Checker, 1);
+    const SceneRenderer renderer(rig);
+    Rendering out;
+    ASSERT_TRUE(renderer.render(scene, RenderSettings{}, out));
+    const void* image = out.image.data;
+    const void* depth = out.depth.data;
+    ASSERT_TRUE(renderer.render(scene, RenderSettings{}, out));
+    EXPECT_EQ(out.image.data, image);
+    EXPECT_EQ(out.depth.data, depth);
+}
+
+TEST(SceneRenderer, BayerMosaicDemosaicsToTheSameColours)
+{
+    const SimRig rig = desktopRig();
+    const Scene scene = makeScene(SceneKind::TiltedPlane, rig, Albedo::Uniform, 1);
+    const SceneRenderer renderer(rig);
+    RenderSettings settings;
+    settings.projectorOn = false;  // smooth colour: demosaicing is exact up to rounding
+    settings.ambient = 0.5;
+    settings.crosstalk = cv::Matx33d(1.0, 0, 0, 0, 0.5, 0, 0, 0, 0.2);  // R, G, B sensors differ
+    Rendering plain, bayer;
+    ASSERT_TRUE(renderer.render(scene, settings, plain));
+    settings.bayer = true;
+    ASSERT_TRUE(renderer.render(scene, settings, bayer));
+    const cv::Rect inner(2, 2, plain.image.cols - 4, plain.image.rows - 4);
+    const cv::Scalar p = cv::mean(plain.image(inner)), q = cv::mean(bayer.image(inner));
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(q[c], p[c], 1.0) << "channel " << c;
+    EXPECT_NEAR(p[2], 102, 1.5);  // red: 0.8 * 0.5 * 255
+    EXPECT_NEAR(p[0], 20.4, 1.5); // blue sensor at 0.2
+}
+
+TEST(SceneRenderer, RejectsBadSettingsWithTheirName)
+{
+    const SimRig rig = desktopRig();
+    const SceneRenderer renderer(rig);
+    RenderSettings settings;
+    settings.contrast = 1.5;
+    Rendering out;
+    const Status s = renderer.render(makeScene(SceneKind::TiltedPlane, rig, Albedo::Uniform, 1), settings, out);
+    EXPECT_FALSE(s);
+    EXPECT_EQ(s.message(), "render setting contrast is 1.500000: it must be in [0, 1]");
+}
+
+// One row: projector columns 3.05, 3.95, ..., 92.15, depth 1000 mm, all lit.
+Rendering syntheticRow()
+{
+    constexpr int kWidth = 100;
+    Rendering r;
+    r.depth = cv::Mat(1, kWidth, CV_32FC1, cv::Scalar(1000));
+    r.projectorColumn.create(1, kWidth, CV_32FC1);
+    for (int x = 0; x < kWidth; ++x) r.projectorColumn.at<float>(0, x) = static_cast<float>(3.05 + 0.9 * x);
+    r.lit = cv::Mat(1, kWidth, CV_8UC1, cv::Scalar(1));
+    return r;
+}
+
+TEST(IdealEdgeCrossings, CountsPatternEdgesBetweenLitContinuousNeighbours)
+{
+    const SimRig rig = desktopRig();  // stripes of 8 px: edges at 7.5, 15.5, ..., 87.5 in this row
+    Rendering r = syntheticRow();
+    EXPECT_EQ(idealEdgeCrossings(r, rig.pattern), 11);
+    r.lit.at<std::uint8_t>(0, 4) = 0;  // pixels 4 (6.65) and 5 (7.55) straddle edge 7.5
+    EXPECT_EQ(idealEdgeCrossings(r, rig.pattern), 10);
+    r = syntheticRow();
+    r.depth.colRange(50, 100).setTo(1030);  // 3% step between 49 (47.15) and 50 (48.05), across edge 47.5
+    EXPECT_EQ(idealEdgeCrossings(r, rig.pattern), 10);
+    r.depth.colRange(50, 100).setTo(1015);  // 1.5%: still one continuous surface
+    EXPECT_EQ(idealEdgeCrossings(r, rig.pattern), 11);
+}
+
+TEST(BoardSim, CalibrationAndPatternFilesAreTheDesktopRig)
+{
+    const SimRig rig = desktopRig();
+    const auto loaded = firmware::loadCalibrationFile(std::string(STRIA_SOURCE_DIR) + "/board/sim/calibration.yaml");
+    ASSERT_TRUE(loaded) << loaded.message();
+    EXPECT_EQ(loaded->camera().width, 780);
+    EXPECT_EQ(loaded->camera().height, 580);
+    EXPECT_EQ(loaded->projector().width, 1024);
+    EXPECT_LT(cv::norm(loaded->camera().K, rig.rig.camera().K, cv::NORM_INF), 1e-9);
+    EXPECT_LT(cv::norm(loaded->projector().K, rig.rig.projector().K, cv::NORM_INF), 1e-9);
+    EXPECT_LT(cv::norm(loaded->camera().distortion, rig.rig.camera().distortion, cv::NORM_INF), 1e-12);
+    EXPECT_LT(cv::norm(loaded->projector().distortion, rig.rig.projector().distortion, cv::NORM_INF), 1e-12);
+    EXPECT_LT(cv::norm(loaded->R(), rig.rig.R(), cv::NORM_INF), 1e-12);
+    EXPECT_LT(cv::norm(loaded->T(), rig.rig.T(), cv::NORM_INF), 1e-9);
+    const auto pattern = firmware::loadPatternFile(std::string(STRIA_SOURCE_DIR) + "/board/sim/pattern.yaml");
+    ASSERT_TRUE(pattern) << pattern.message();
+    EXPECT_EQ(pattern->colorLetters(), rig.pattern.colorLetters());
+    EXPECT_EQ(pattern->stripeWidth(), 8);
+    EXPECT_EQ(pattern->window(), 4);
+}
+
+TEST(SimRigs, StripesAreAboutSevenCameraPixelsWideAtTheWorkingDistance)
+{
+    for (const SimRig& rig : {desktopRig(), fingerprintRig(), endoscopeRig()}) {
+        // A surface facing the camera at the working distance: distance in
+        // camera px between the points lit by two edges 16 stripes apart.
+        Scene scene;
+        scene.planes.push_back({{0, 0, rig.workingDistanceMm}, cv::Matx33d::eye(), {1e9, 1e9}, {}});
+        Rendering out;
+        RenderSettings settings;
+        settings.samplesPerPixel = 1;
+        ASSERT_TRUE(SceneRenderer(rig).render(scene, settings, out));
+        const int y = out.depth.rows / 2, x = out.depth.cols / 2;
+        const float* column = out.projectorColumn.ptr<float>(y);
+        const double slope = (column[x + 8] - column[x - 8]) / 16.0;  // projector px per camera px
+        EXPECT_NEAR(rig.pattern.stripeWidth() / slope, 7.0, 0.5) << rig.rig.camera().width;
+    }
+}
+
+}  // namespace
+}  // namespace stria::hal::sim
