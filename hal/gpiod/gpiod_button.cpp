@@ -60,7 +60,8 @@ Status GpiodButton::feedPendingEdges()
 
 Result<ButtonWait> GpiodButton::waitForPress(std::chrono::milliseconds timeout)
 {
-    const std::int64_t endNs = monotonicNs() + std::int64_t(timeout.count()) * 1'000'000;
+    const std::int64_t timeoutMs = std::min<std::int64_t>(timeout.count(), std::int64_t{1} << 40);  // no overflow
+    const std::int64_t endNs = monotonicNs() + timeoutMs * 1'000'000;
     for (;;) {
         // Edges first, so the Debouncer sees them before it is advanced to now.
         if (Status s = feedPendingEdges(); !s) return s;

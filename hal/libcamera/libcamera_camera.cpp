@@ -201,7 +201,8 @@ Result<CapturedFrame> LibcameraCamera::capture(std::chrono::milliseconds timeout
         previous->reuse(Request::ReuseBuffers);
         if (Status s = queue(previous); !s) return s;
     }
-    const auto deadline = std::chrono::steady_clock::now() + timeout;
+    const auto deadline =
+        std::chrono::steady_clock::now() + std::min(timeout, std::chrono::milliseconds(std::int64_t{1} << 40));
     double lastExposureUs = 0;
     for (int frames = 0; frames < kMaxSettleFrames; ++frames) {
         Request* request;

@@ -289,7 +289,7 @@ Result<CapturedFrame> V4l2Camera::capture(std::chrono::milliseconds timeout)
 {
     if (!streaming_) return Status::error("camera '" + device_->path() + "': capture() before start()");
     using Clock = std::chrono::steady_clock;
-    const Clock::time_point deadline = Clock::now() + timeout;
+    const Clock::time_point deadline = Clock::now() + std::min(timeout, std::chrono::milliseconds(std::int64_t{1} << 40));
     for (;;) {
         const auto left = std::chrono::ceil<std::chrono::milliseconds>(deadline - Clock::now());
         const int ready = device_->waitReadable(int(std::max<std::int64_t>(left.count(), 0)));

@@ -16,6 +16,8 @@ namespace {
 struct Head {
     const char* folder;
     const char* cameraBackend;
+    const char* cameraDevice;
+    const char* gpioChip;  // by label: chip numbers change between kernels
     double workingDistanceMm;  // where the camera and projector axes cross
 };
 
@@ -31,6 +33,11 @@ TEST_P(RealHead, BoardPatternAndCalibrationAgree)
     ASSERT_TRUE(board.isOk()) << board.message();
     EXPECT_EQ(board->name, head.folder);
     EXPECT_EQ(board->camera.backend, head.cameraBackend);
+    EXPECT_EQ(board->camera.device, head.cameraDevice);
+    EXPECT_EQ(board->light.chip, head.gpioChip);
+    EXPECT_EQ(board->button.chip, head.gpioChip);
+    EXPECT_EQ(board->light.line, 17);   // README.md pin maps
+    EXPECT_EQ(board->button.line, 27);
     EXPECT_EQ(board->light.backend, "gpiod");
     EXPECT_EQ(board->button.backend, "gpiod");
     EXPECT_FALSE(board->light.activeLow);
@@ -56,8 +63,8 @@ TEST_P(RealHead, BoardPatternAndCalibrationAgree)
 }
 
 INSTANTIATE_TEST_SUITE_P(Boards, RealHead,
-                         ::testing::Values(Head{"fingerprint-cm4", "libcamera", 60.0},
-                                           Head{"endoscope-pi5", "v4l2", 20.0}),
+                         ::testing::Values(Head{"fingerprint-cm4", "libcamera", "0", "pinctrl-bcm2711", 60.0},
+                                           Head{"endoscope-pi5", "v4l2", "/dev/stria-endoscope", "pinctrl-rp1", 20.0}),
                          [](const auto& info) {
                              std::string name = info.param.folder;
                              for (char& c : name) c = std::isalnum(static_cast<unsigned char>(c)) ? c : '_';
