@@ -240,11 +240,12 @@ Scene makeScene(SceneKind kind, const SimRig& simRig, Albedo albedo, std::uint64
     }
 
     case SceneKind::Tube: {
-        // The inside of a 9 mm radius tube from the lens to 1.5 D, closed
-        // there, with a polyp on the wall.
-        const double radius = 0.45 * D, length = 1.5 * D;
+        // The inside of a 9 mm radius tube from behind the lens to 1.5 D,
+        // closed there, with a polyp on the wall.
+        const double radius = 0.45 * D, length = 1.5 * D, behind = 0.25 * D;
         const cv::Vec3f mucosa(0.45f, 0.5f, 0.75f);
-        scene.cylinders.push_back({{0, 0, length / 2}, rotX(4), radius, length / 2, true, texture(mucosa, 0.1 * D)});
+        scene.cylinders.push_back({rotX(4) * cv::Vec3d(0, 0, (length - behind) / 2), rotX(4), radius,
+                                   (length + behind) / 2, true, texture(mucosa, 0.1 * D)});
         scene.planes.push_back(plane(rotX(4) * cv::Vec3d(0, 0, length), rotX(4), texture(mucosa, 0.1 * D),
                                      {radius * 1.1, radius * 1.1}));
         const double polypAngle = uniform(150, 210) * kDeg;
