@@ -54,7 +54,7 @@ struct DecoderParams {
     // decode() decodes what fits and sets DecodeResult::truncated.
     int maxSuperpixels = 0;  // default: pixels / 16
     int maxGraphEdges = 0;   // default: 3 * maxSuperpixels (a planar graph has fewer)
-    int maxPoints = 0;       // default: pixels / 6
+    int maxPoints = 0;       // default and maximum: pixels / 6 (the points share a per-pixel buffer)
 };
 
 struct ScanPoint {

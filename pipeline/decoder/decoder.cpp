@@ -109,17 +109,20 @@ Result<std::unique_ptr<Decoder>> Decoder::create(const StripePattern& pattern, c
     std::size_t& bytes = ws->allocatedBytes;
     ws->gradient = allocate<std::uint8_t>(n, bytes);
     ws->labels = allocate<std::int32_t>(n, bytes);
-    ws->pixelOrder = allocate<std::int32_t>(n, bytes);
+    ws->maxPoints = std::min<int>(ws->maxPoints, static_cast<int>(n * sizeof(std::int32_t) / sizeof(ScanPoint)));
+    ws->orderAndPoints = allocate<std::byte>(n * sizeof(std::int32_t), bytes);
+    ws->pixelOrder = reinterpret_cast<std::int32_t*>(ws->orderAndPoints.get());
+    ws->points = reinterpret_cast<ScanPoint*>(ws->orderAndPoints.get());
     ws->scratch = allocate<std::int32_t>(n, bytes);
     ws->regions = allocate<Region>(ws->maxRegions, bytes);
     ws->edges = allocate<GraphEdge>(ws->maxEdges, bytes);
     ws->adjacency = allocate<std::int32_t>(2 * static_cast<std::size_t>(ws->maxEdges), bytes);
     ws->edgeOrder = allocate<std::int32_t>(ws->maxEdges, bytes);
-    ws->open = allocate<OpenEntry>(ws->maxEdges, bytes);
+    ws->maxOpen = std::max(16, ws->maxEdges / 2);
+    ws->open = allocate<OpenEntry>(ws->maxOpen, bytes);
     ws->candidates = allocate<std::int32_t>(pattern.edgeCount(), bytes);
     ws->pathVertices = allocate<std::int32_t>(2 * (pattern.window() + 1) + 1, bytes);
     ws->componentSize = allocate<std::int32_t>(ws->maxRegions, bytes);
-    ws->points = allocate<ScanPoint>(ws->maxPoints, bytes);
 
     ws->lightPlanes = allocate<Plane>(pattern.edgeCount(), bytes);
     for (int k = 0; k < pattern.edgeCount(); ++k) ws->lightPlanes[k] = rig.lightPlaneForColumn(pattern.edgeColumn(k));
@@ -171,7 +174,7 @@ Result<DecodeResult> Decoder::decode(const FrameView& frame)
     t.depthMs = millisecondsSince(lap);
     t.totalMs = std::chrono::duration<double, std::milli>(lap - begin).count();
 
-    result.points = std::span<const ScanPoint>(ws.points.get(), static_cast<std::size_t>(ws.pointCount));
+    result.points = std::span<const ScanPoint>(ws.points, static_cast<std::size_t>(ws.pointCount));
     result.superpixels = ws.regionCount;
     result.graphEdges = ws.edgeCount;
     result.decodedRegions = ws.decodedRegions;

@@ -57,7 +57,8 @@ void buildGraph(DecoderWorkspace& ws)
         if (e < 0) return;
         GraphEdge& edge = ws.edges[e];
         ++edge.borderCount;
-        (horizontal ? edge.normalX : edge.normalY) += sign;
+        std::int16_t& normal = horizontal ? edge.normalX : edge.normalY;
+        if (normal > -32767 && normal < 32767) normal = static_cast<std::int16_t>(normal + sign);
 
         // Image gradient at the middle of the pair, summed over channels.
         const std::uint8_t* r0 = ws.frame.row(y);

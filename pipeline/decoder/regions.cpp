@@ -20,20 +20,21 @@ void computeRegions(DecoderWorkspace& ws)
     for (int r = 0; r < count; ++r) regions[r] = Region{};
 
     for (int p = 0; p < n; ++p) ++regions[label[p]].pixelCount;
+    // Counting sort by label; adjacencyBegin serves as the fill cursor (the
+    // graph stage sets it properly later).
     std::int32_t offset = 0;
     for (int r = 0; r < count; ++r) {
-        regions[r].firstPixel = offset;
+        regions[r].adjacencyBegin = offset;
         offset += regions[r].pixelCount;
-        regions[r].adjacencyBegin = regions[r].firstPixel;  // fill cursor for the sort below
     }
-    std::int32_t* order = ws.pixelOrder.get();
+    std::int32_t* order = ws.pixelOrder;
     for (int p = 0; p < n; ++p) order[regions[label[p]].adjacencyBegin++] = p;
 
     auto* bytes = reinterpret_cast<std::uint8_t*>(ws.scratch.get());
     const cv::Matx33f& m = ws.colorCorrection;
+    const std::int32_t* pixels = order;
     for (int r = 0; r < count; ++r) {
         Region& region = regions[r];
-        const std::int32_t* pixels = order + region.firstPixel;
         const int size = region.pixelCount;
         long long sx = 0, sy = 0;
         for (int i = 0; i < size; ++i) {
@@ -55,6 +56,7 @@ void computeRegions(DecoderWorkspace& ws)
         const cv::Vec3f corrected = m * median;
         region.color = {corrected[0], corrected[1], corrected[2]};
         region.adjacencyBegin = 0;
+        pixels += size;
     }
 }
 

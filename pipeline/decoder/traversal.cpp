@@ -231,7 +231,7 @@ private:
             } else {
                 continue;
             }
-            if (ws_.openCount == ws_.maxEdges) {
+            if (ws_.openCount == ws_.maxOpen) {
                 ws_.truncated = true;
                 return;
             }

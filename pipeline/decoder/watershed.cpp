@@ -22,7 +22,7 @@ void computeWatershed(DecoderWorkspace& ws)
     const int w = ws.width, h = ws.height, n = w * h;
     const std::uint8_t* g = ws.gradient.get();
     std::int32_t* label = ws.labels.get();
-    std::int32_t* order = ws.pixelOrder.get();
+    std::int32_t* order = ws.pixelOrder;
     std::int32_t* next = ws.scratch.get();
 
     std::array<std::int32_t, 257> start{};

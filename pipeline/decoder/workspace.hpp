@@ -24,7 +24,6 @@ struct Region {
     std::array<float, 3> range{};     // eq. 1: largest |change| per channel over all neighbours
     float centroidX = 0, centroidY = 0;
     std::int32_t pixelCount = 0;
-    std::int32_t firstPixel = 0;      // into Workspace::pixelOrder (label-sorted)
     std::int32_t adjacencyBegin = 0;  // incident edges: Workspace::adjacency[begin, begin + degree)
     std::int32_t degree = 0;
     std::int32_t edgeListHead = -1;   // graph construction: edges whose smaller label is this one
@@ -44,7 +43,7 @@ struct GraphEdge {
     std::int32_t borderCount = 0;
     // Sum of unit border normals pointing from a to b (pixel pairs: +-x for a
     // horizontal pair, +-y for a vertical one): the chord of the border line.
-    std::int32_t normalX = 0, normalY = 0;
+    std::int16_t normalX = 0, normalY = 0;
     float primaryGradient = 0, secondaryGradient = 0;  // eq. 8 sums over the border pixels
     float weight = 0;        // eq. 3: L-inf of the raw colour change
     float gradientError = 0; // eq. 8
@@ -81,8 +80,13 @@ struct DecoderWorkspace {
     // Per pixel.
     std::unique_ptr<std::uint8_t[]> gradient;
     std::unique_ptr<std::int32_t[]> labels;
-    std::unique_ptr<std::int32_t[]> pixelOrder;  // by gradient level (watershed), then by label (regions)
-    std::unique_ptr<std::int32_t[]> scratch;     // watershed FIFO links, then median selection bytes
+    // One buffer, three uses in turn: pixel indices by gradient level
+    // (watershed), then by label (regions), then the output points (depth).
+    // Points are 24 bytes, so maxPoints = pixels / 6 fits exactly.
+    std::unique_ptr<std::byte[]> orderAndPoints;
+    std::int32_t* pixelOrder = nullptr;
+    ScanPoint* points = nullptr;
+    std::unique_ptr<std::int32_t[]> scratch;  // watershed FIFO links, then median selection bytes
 
     // Graph.
     int maxRegions = 0, maxEdges = 0, maxPoints = 0;
@@ -90,7 +94,8 @@ struct DecoderWorkspace {
     std::unique_ptr<GraphEdge[]> edges;
     std::unique_ptr<std::int32_t[]> adjacency;  // 2 * maxEdges incident edge indices (CSR)
     std::unique_ptr<std::int32_t[]> edgeOrder;  // edges sorted by bestError (seeding order)
-    std::unique_ptr<OpenEntry[]> open;          // heap, maxEdges entries
+    int maxOpen = 0;
+    std::unique_ptr<OpenEntry[]> open;          // heap, maxOpen entries
     int openCount = 0;
     std::unique_ptr<std::int32_t[]> candidates;  // seeding: candidate pattern positions (edgeCount)
     std::unique_ptr<std::int32_t[]> pathVertices;  // seeding: the path, window + 1 regions
@@ -100,9 +105,6 @@ struct DecoderWorkspace {
     std::unique_ptr<Plane[]> lightPlanes;  // per pattern edge
     int rayGridStep = 4, rayGridWidth = 0, rayGridHeight = 0;
     std::unique_ptr<cv::Vec2f[]> rayGrid;  // undistorted normalised coordinates every rayGridStep px
-
-    // Output.
-    std::unique_ptr<ScanPoint[]> points;
 
     // Per-frame counts.
     int regionCount = 0, edgeCount = 0, pointCount = 0, passCount = 0, decodedRegions = 0;

@@ -1,0 +1,199 @@
+// The decoder's stages on synthetic frames whose answer is known exactly: the
+// slide itself seen 1:1 (tests/decoder/synthetic_rig.hpp).
+#include "pipeline/decoder.hpp"
+#include "pipeline/decoder/workspace.hpp"
+#include "tests/decoder/synthetic_rig.hpp"
+
+#include <gtest/gtest.h>
+#include <opencv2/imgproc.hpp>
+
+#include <cmath>
+#include <set>
+
+namespace stria::pipeline {
+namespace {
+
+FrameView viewOf(const cv::Mat& image, PixelFormat format = PixelFormat::Bgr8)
+{
+    return {image.data, image.cols, image.rows, static_cast<std::ptrdiff_t>(image.step), format};
+}
+
+struct SlideCase {
+    StripePattern pattern = test::slidePattern();
+    RigModel rig = test::slideRig(pattern, 48);
+    cv::Mat slide = pattern.renderSlide(pattern.projectorColumnsUsed(), 48);
+};
+
+TEST(DecoderEquations, MatchErrorFollowsEquations5And6)
+{
+    const float t = 1.0f / 3.0f;
+    // A perfect R+G- change has no error; a channel at the threshold costs 1.
+    EXPECT_FLOAT_EQ(matchError({1, -1, 0}, makeSymbol(1, -1, 0), t), 0.0f);
+    EXPECT_FLOAT_EQ(matchError({1, -1, t}, makeSymbol(1, -1, 0), t), 1.0f);
+    // (0.5, -1, 0) against R+G-: red (1 - 0.5) / (2/3) = 0.75.
+    EXPECT_NEAR(matchError({0.5f, -1, 0}, makeSymbol(1, -1, 0), t), 0.75f, 1e-6);
+    // Both off-symbols: sqrt(0.75^2 + 1.5^2).
+    EXPECT_NEAR(matchError({0.5f, -1, 0.5f}, makeSymbol(1, -1, 0), t), std::sqrt(0.5625f + 2.25f), 1e-6);
+}
+
+TEST(DecoderEquations, OptimalSymbolThresholdsAtT)
+{
+    const float t = 1.0f / 3.0f;
+    EXPECT_EQ(optimalSymbol({0.2f, -1, 0.5f}, t), makeSymbol(0, -1, 1));
+    EXPECT_EQ(optimalSymbol({-0.34f, 1, 0.33f}, t), makeSymbol(-1, 1, 0));
+}
+
+TEST(DecoderStages, CleanSlideGivesOneSuperpixelPerStripeAndEveryStripeDecoded)
+{
+    SlideCase c;
+    auto decoder = Decoder::create(c.pattern, c.rig);
+    ASSERT_TRUE(decoder) << decoder.message();
+    auto result = (*decoder)->decode(viewOf(c.slide));
+    ASSERT_TRUE(result) << result.message();
+    EXPECT_EQ(result->superpixels, c.pattern.stripeCount());
+    EXPECT_EQ(result->graphEdges, c.pattern.edgeCount());
+    EXPECT_EQ(result->decodedRegions, c.pattern.stripeCount());
+    EXPECT_FALSE(result->truncated);
+    const cv::Mat labels = (*decoder)->labels();
+    int wrong = 0;
+    for (int y = 0; y < labels.rows; ++y)
+        for (int x = 0; x < labels.cols; ++x)
+            wrong += (*decoder)->regionStripe(labels.at<int>(y, x)) != x / c.pattern.stripeWidth();
+    EXPECT_EQ(wrong, 0);
+    // One point per row and edge, exactly on the edge column.
+    ASSERT_EQ(result->points.size(), static_cast<std::size_t>(c.pattern.edgeCount() * c.slide.rows));
+    double worst = 0, worstDepth = 0;
+    for (const ScanPoint& p : result->points) {
+        worst = std::max(worst, std::abs(p.pixel.x - c.pattern.edgeColumn(p.edge)));
+        worstDepth = std::max(worstDepth, std::abs(p.position[2] - 1000.0));
+    }
+    EXPECT_LT(worst, 1e-4);
+    EXPECT_LT(worstDepth, 1e-3);  // mm: the plane the slide rig sees
+}
+
+TEST(DecoderStages, RgbFramesDecodeLikeBgr)
+{
+    SlideCase c;
+    cv::Mat rgb;
+    cv::cvtColor(c.slide, rgb, cv::COLOR_BGR2RGB);
+    auto decoder = Decoder::create(c.pattern, c.rig);
+    auto result = (*decoder)->decode(viewOf(rgb, PixelFormat::Rgb8));
+    ASSERT_TRUE(result);
+    EXPECT_EQ(result->decodedRegions, c.pattern.stripeCount());
+}
+
+TEST(DecoderStages, SubPixelEdgesOnBlurredNoisySlideWithinATenthOfAPixel)
+{
+    SlideCase c;
+    cv::Mat blurred, noisy;
+    cv::GaussianBlur(c.slide, blurred, {0, 0}, 1.2, 0.01);
+    cv::Mat noise(blurred.size(), CV_16SC3);
+    cv::RNG rng(5);
+    rng.fill(noise, cv::RNG::NORMAL, 0, 2);
+    cv::Mat sum;
+    cv::add(blurred, noise, sum, cv::noArray(), CV_16SC3);
+    sum.convertTo(noisy, CV_8UC3);
+    auto decoder = Decoder::create(c.pattern, c.rig);
+    auto result = (*decoder)->decode(viewOf(noisy));
+    ASSERT_TRUE(result);
+    ASSERT_GT(result->points.size(), 0.95 * c.pattern.edgeCount() * c.slide.rows);
+    double sum2 = 0;
+    int wrongEdge = 0;
+    for (const ScanPoint& p : result->points) {
+        const double d = p.pixel.x - c.pattern.edgeColumn(p.edge);
+        wrongEdge += std::abs(d) > 2;
+        sum2 += d * d;
+    }
+    EXPECT_EQ(wrongEdge, 0);
+    EXPECT_LT(std::sqrt(sum2 / result->points.size()), 0.1);
+}
+
+TEST(DecoderStages, CrosstalkIsCorrected)
+{
+    SlideCase c;
+    // Strong mixing: each sensor channel sees 35% of its neighbours' light.
+    const cv::Matx33f mixing(1.0f, 0.35f, 0.0f, 0.35f, 1.0f, 0.35f, 0.0f, 0.35f, 1.0f);
+    cv::Mat mixed(c.slide.size(), CV_8UC3);
+    for (int y = 0; y < c.slide.rows; ++y)
+        for (int x = 0; x < c.slide.cols; ++x) {
+            const cv::Vec3b bgr = c.slide.at<cv::Vec3b>(y, x);
+            const cv::Vec3f rgb = mixing * cv::Vec3f(bgr[2], bgr[1], bgr[0]) * (1.0f / 1.7f);
+            mixed.at<cv::Vec3b>(y, x) = cv::Vec3b(cv::saturate_cast<uchar>(rgb[2]), cv::saturate_cast<uchar>(rgb[1]),
+                                                  cv::saturate_cast<uchar>(rgb[0]));
+        }
+    DecoderParams params;
+    params.crosstalk = mixing;
+    auto decoder = Decoder::create(c.pattern, c.rig, params);
+    ASSERT_TRUE(decoder) << decoder.message();
+    auto result = (*decoder)->decode(viewOf(mixed));
+    ASSERT_TRUE(result);
+    EXPECT_EQ(result->decodedRegions, c.pattern.stripeCount());
+}
+
+TEST(DecoderStages, NoiseWithTinyCapacitiesIsTruncatedNotOverflowed)
+{
+    SlideCase c;
+    cv::Mat noise(c.slide.size(), CV_8UC3);
+    cv::RNG rng(9);
+    rng.fill(noise, cv::RNG::UNIFORM, 0, 256);
+    DecoderParams params;
+    params.maxSuperpixels = 50;
+    params.maxGraphEdges = 60;
+    params.maxPoints = 10;
+    auto decoder = Decoder::create(c.pattern, c.rig, params);
+    ASSERT_TRUE(decoder);
+    for (const cv::Mat& frame : {noise, c.slide}) {
+        auto result = (*decoder)->decode(viewOf(frame));
+        ASSERT_TRUE(result);
+        EXPECT_TRUE(result->truncated);
+        EXPECT_LE(result->superpixels, 50);
+        EXPECT_LE(result->graphEdges, 60);
+        EXPECT_LE(result->points.size(), 10u);
+    }
+}
+
+TEST(DecoderErrors, WrongFrameSizeNamesBothSizes)
+{
+    SlideCase c;
+    auto decoder = Decoder::create(c.pattern, c.rig);
+    const cv::Mat small(40, 100, CV_8UC3, cv::Scalar::all(0));
+    auto result = (*decoder)->decode(viewOf(small));
+    ASSERT_FALSE(result);
+    EXPECT_EQ(result.message(), "decode: the frame is 100x40 but the camera is calibrated for 320x48");
+}
+
+TEST(DecoderErrors, WrongPixelFormatIsNamed)
+{
+    SlideCase c;
+    auto decoder = Decoder::create(c.pattern, c.rig);
+    auto result = (*decoder)->decode(viewOf(c.slide, PixelFormat::Yuyv));
+    ASSERT_FALSE(result);
+    EXPECT_NE(result.message().find("the decoder needs BGR8 or RGB8"), std::string::npos) << result.message();
+}
+
+TEST(DecoderErrors, PatternWiderThanProjectorAndSingularCrosstalkAreRefused)
+{
+    const StripePattern wide = test::slidePattern(60);  // 480 columns
+    const RigModel rig = test::slideRig(test::slidePattern(40), 48);  // projector 320 wide
+    auto tooWide = Decoder::create(wide, rig);
+    ASSERT_FALSE(tooWide);
+    EXPECT_EQ(tooWide.message(), "the pattern needs 480 projector columns but the calibrated projector is only 320 wide");
+
+    DecoderParams params;
+    params.crosstalk = cv::Matx33f(1, 1, 0, 1, 1, 0, 0, 0, 1);
+    auto singular = Decoder::create(test::slidePattern(40), rig, params);
+    ASSERT_FALSE(singular);
+    EXPECT_NE(singular.message().find("crosstalk matrix is singular"), std::string::npos);
+}
+
+TEST(DecoderMemory, WorkspaceStaysUnder34BytesPerPixel)
+{
+    SlideCase c;
+    auto decoder = Decoder::create(c.pattern, c.rig);
+    const double perPixel = static_cast<double>((*decoder)->workspaceBytes()) / (c.slide.cols * c.slide.rows);
+    EXPECT_LT(perPixel, 34.0);
+    EXPECT_GT(perPixel, 13.0);  // at least gradient + labels + two index buffers
+}
+
+}  // namespace
+}  // namespace stria::pipeline
