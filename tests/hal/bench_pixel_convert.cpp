@@ -4,6 +4,7 @@
 #include "hal/v4l2/pixel_convert.hpp"
 
 #include <benchmark/benchmark.h>
+#include <opencv2/core/utility.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include <cstdint>
@@ -36,6 +37,7 @@ void stria(benchmark::State& state)
 
 void opencvReference(benchmark::State& state)
 {
+    cv::setNumThreads(int(state.range(2)));  // 1: one core, like stria's conversion; 0: OpenCV's default pool
     Buffers b(int(state.range(0)), int(state.range(1)));
     const cv::Mat src(b.height, b.width, CV_8UC2, b.yuyv.data());
     cv::Mat dst(b.height, b.width, CV_8UC3, b.bgr.data());
@@ -47,6 +49,6 @@ void opencvReference(benchmark::State& state)
 }
 
 BENCHMARK(stria)->Args({640, 480})->Args({1280, 720});
-BENCHMARK(opencvReference)->Args({640, 480})->Args({1280, 720});
+BENCHMARK(opencvReference)->Args({640, 480, 1})->Args({1280, 720, 1})->Args({640, 480, 0})->Args({1280, 720, 0});
 
 }  // namespace
