@@ -5,21 +5,25 @@
 namespace stria::firmware {
 namespace {
 
-std::atomic<Scanner*> gScanner{nullptr};
+// The loop is published before the function and withdrawn after it, so the
+// handler never calls a function with a stale loop.
+std::atomic<void*> gLoop{nullptr};
+std::atomic<void (*)(void*)> gRequestStop{nullptr};
 volatile std::sig_atomic_t gReceived = 0;
 
 extern "C" void onStopSignal(int signal)
 {
     gReceived = signal;
-    if (Scanner* scanner = gScanner.load()) scanner->requestStop();
+    if (auto* requestStop = gRequestStop.load()) requestStop(gLoop.load());
 }
 
 }  // namespace
 
-StopSignals::StopSignals(Scanner& scanner)
+StopSignals::StopSignals(void (*requestStop)(void*), void* loop)
 {
     gReceived = 0;
-    gScanner.store(&scanner);
+    gLoop.store(loop);
+    gRequestStop.store(requestStop);
     struct sigaction action {};
     action.sa_handler = onStopSignal;
     sigemptyset(&action.sa_mask);
@@ -32,7 +36,8 @@ StopSignals::~StopSignals()
 {
     sigaction(SIGINT, &previousInt_, nullptr);
     sigaction(SIGTERM, &previousTerm_, nullptr);
-    gScanner.store(nullptr);
+    gRequestStop.store(nullptr);
+    gLoop.store(nullptr);
 }
 
 int StopSignals::received() { return gReceived; }

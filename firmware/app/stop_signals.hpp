@@ -1,17 +1,19 @@
 #pragma once
-// SIGINT and SIGTERM (Ctrl-C, systemctl stop) call Scanner::requestStop() from
-// the signal handler: it switches the LED off with one write and wakes the
-// button, and the loop then ends cleanly. The previous handlers come back when
-// this object goes away.
-#include "firmware/app/scanner.hpp"
-
+// SIGINT and SIGTERM (Ctrl-C, systemctl stop) call the loop's requestStop()
+// (Scanner, Streamer) from the signal handler: it switches the LED off with
+// one write and wakes the waits, and the loop then ends cleanly. The previous
+// handlers come back when this object goes away.
 #include <csignal>
 
 namespace stria::firmware {
 
 class StopSignals {
 public:
-    explicit StopSignals(Scanner& scanner);
+    // `Loop::requestStop()` must be async-signal-safe.
+    template <typename Loop>
+    explicit StopSignals(Loop& loop) : StopSignals([](void* l) { static_cast<Loop*>(l)->requestStop(); }, &loop)
+    {
+    }
     ~StopSignals();
     StopSignals(const StopSignals&) = delete;
     StopSignals& operator=(const StopSignals&) = delete;
@@ -20,6 +22,8 @@ public:
     static int received();
 
 private:
+    StopSignals(void (*requestStop)(void*), void* loop);
+
     struct sigaction previousInt_ {};
     struct sigaction previousTerm_ {};
 };
