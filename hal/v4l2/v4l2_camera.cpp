@@ -142,7 +142,7 @@ Status V4l2Camera::setFormat(const CameraConfig& config)
                              " " + std::to_string(format.fmt.pix.width) + "x" + std::to_string(format.fmt.pix.height) +
                              " when asked for " + fourccName(pixelFormat_) + " " + std::to_string(config.width) + "x" +
                              std::to_string(config.height) + ": pick a size the camera supports (v4l2-ctl --list-formats-ext)");
-    // The frame period bounds the sensor readout (see frameStartNs()).
+    // The frame period bounds the sensor readout (see exposureStartNs()).
     v4l2_streamparm parm{};
     parm.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
     const v4l2_fract& period = parm.parm.capture.timeperframe;
