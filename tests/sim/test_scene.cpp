@@ -6,7 +6,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <vector>
 
 namespace stria::hal::sim {
 namespace {
@@ -255,6 +257,102 @@ TEST(SceneRenderer, BayerMosaicDemosaicsToTheSameColours)
     for (int c = 0; c < 3; ++c) EXPECT_NEAR(q[c], p[c], 1.0) << "channel " << c;
     EXPECT_NEAR(p[2], 102, 1.5);  // red: 0.8 * 0.5 * 255
     EXPECT_NEAR(p[0], 20.4, 1.5); // blue sensor at 0.2
+}
+
+// Sharpness of the stripes in the noise-free green signal: mean squared
+// horizontal difference over the squared mean, over lit pixels. Blurring a
+// step of height h with sigma s leaves a squared-difference sum ~ h^2 / s.
+double stripeSharpness(const Rendering& r)
+{
+    double energy = 0, sum = 0;
+    long n = 0;
+    for (int y = 0; y < r.radiance.rows; y += 8)
+        for (int x = 0; x + 1 < r.radiance.cols; ++x) {
+            if (!r.lit.at<std::uint8_t>(y, x) || !r.lit.at<std::uint8_t>(y, x + 1)) continue;
+            const double a = r.radiance.at<cv::Vec3f>(y, x)[1], b = r.radiance.at<cv::Vec3f>(y, x + 1)[1];
+            energy += (b - a) * (b - a);
+            sum += a;
+            ++n;
+        }
+    const double mean = sum / n;
+    return energy / n / (mean * mean);
+}
+
+TEST(SceneRenderer, ProjectorDefocusGrowsAwayFromTheFocusDistance)
+{
+    const SimRig rig = desktopRig();
+    const SceneRenderer renderer(rig);
+    // Walls square to the projector's axis: one projector depth each.
+    const cv::Vec3d axis(rig.rig.R()(2, 0), rig.rig.R()(2, 1), rig.rig.R()(2, 2));
+    const double focus = rig.rig.cameraToProjector({0, 0, rig.workingDistanceMm})[2];
+    auto wallAt = [&](double projectorDepth) {
+        Scene scene;
+        scene.planes.push_back({rig.rig.projectorCentreInCamera() + axis * projectorDepth, rig.rig.R().t(), {1e9, 1e9}, {}});
+        return scene;
+    };
+    RenderSettings sharp;
+    sharp.cameraBlurPx = 0;
+    sharp.ambient = 0;
+    sharp.projectorDefocusPx = 0;
+    RenderSettings defocused = sharp;
+    defocused.projectorDefocusPx = 3;
+    Rendering a, b;
+    // At the focus distance the defocus term vanishes.
+    ASSERT_TRUE(renderer.render(wallAt(focus), sharp, a));
+    ASSERT_TRUE(renderer.render(wallAt(focus), defocused, b));
+    EXPECT_NEAR(stripeSharpness(b) / stripeSharpness(a), 1.0, 0.02);
+    // At 0.6 of it sigma grows from 0.5 by 3 px * (1/0.6 - 1) = 2 projector
+    // px: stripe edges are much softer.
+    ASSERT_TRUE(renderer.render(wallAt(0.6 * focus), sharp, a));
+    ASSERT_TRUE(renderer.render(wallAt(0.6 * focus), defocused, b));
+    EXPECT_LT(stripeSharpness(b) / stripeSharpness(a), 0.5);
+    // ... and so they are behind the focus, at 1.6 times it (+3 * 0.375 px).
+    ASSERT_TRUE(renderer.render(wallAt(1.6 * focus), sharp, a));
+    ASSERT_TRUE(renderer.render(wallAt(1.6 * focus), defocused, b));
+    EXPECT_LT(stripeSharpness(b) / stripeSharpness(a), 0.8);
+}
+
+TEST(Textures, AlbedosHaveTheirCharacter)
+{
+    const SimRig rig = desktopRig();
+    const SceneRenderer renderer(rig);
+    RenderSettings settings;
+    settings.projectorOn = false;  // ambient only: the image is the albedo
+    settings.ambient = 1.0;
+    for (Albedo albedo : {Albedo::Uniform, Albedo::Checker, Albedo::Coloured, Albedo::Photo}) {
+        Rendering out;
+        ASSERT_TRUE(renderer.render(makeScene(SceneKind::TiltedPlane, rig, albedo, 3), settings, out));
+        double chroma = 0;
+        std::vector<double> luminance;
+        for (int y = 0; y < out.radiance.rows; y += 4)
+            for (int x = 0; x < out.radiance.cols; x += 4) {
+                const cv::Vec3f v = out.radiance.at<cv::Vec3f>(y, x);
+                const double hi = std::max({v[0], v[1], v[2]}), lo = std::min({v[0], v[1], v[2]});
+                chroma += (hi - lo) / hi;
+                luminance.push_back(v[0] + v[1] + v[2]);
+            }
+        chroma /= luminance.size();
+        std::sort(luminance.begin(), luminance.end());
+        const double spread = luminance[luminance.size() * 9 / 10] / luminance[luminance.size() / 10];
+        switch (albedo) {
+        case Albedo::Uniform:
+            EXPECT_LT(chroma, 1e-3);
+            EXPECT_NEAR(spread, 1.0, 1e-3);
+            break;
+        case Albedo::Checker:  // grey squares of 0.85 and 0.25
+            EXPECT_LT(chroma, 1e-3);
+            EXPECT_NEAR(spread, 0.85 / 0.25, 0.1);
+            break;
+        case Albedo::Coloured:  // strongly saturated patches
+            EXPECT_GT(chroma, 0.6);
+            break;
+        case Albedo::Photo:  // broad range of brightness, moderate colour
+            EXPECT_GT(spread, 2.0);
+            EXPECT_GT(chroma, 0.1);
+            EXPECT_LT(chroma, 0.6);
+            break;
+        }
+    }
 }
 
 TEST(SceneRenderer, RejectsBadSettingsWithTheirName)
