@@ -35,7 +35,7 @@ struct ScanRecord {
     pipeline::StageTimings decode;
     double captureMs = 0, writeMs = 0, totalMs = 0;  // press -> record written
 
-    std::vector<std::string> files;  // written next to the record
+    std::vector<std::string> files;  // result files beside this record (not the record itself)
 };
 
 std::string scanRecordJson(const ScanRecord& record);
