@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <string>
 
 namespace stria::pipeline {
@@ -229,6 +230,17 @@ Result<DecodeResult> DpDecoder::decode(const FrameView& frame)
     result.timings.totalMs =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
     return result;
+}
+
+void DpDecoder::fillDepthMap(cv::Mat& depth) const
+{
+    const LensModel& camera = rig_.camera();
+    depth.create(camera.height, camera.width, CV_32FC1);
+    depth.setTo(std::numeric_limits<float>::quiet_NaN());
+    for (const ScanPoint& p : points_) {
+        const int x = static_cast<int>(std::lround(p.pixel.x)), y = static_cast<int>(std::lround(p.pixel.y));
+        if (x >= 0 && x < camera.width && y >= 0 && y < camera.height) depth.at<float>(y, x) = p.position[2];
+    }
 }
 
 }  // namespace stria::pipeline

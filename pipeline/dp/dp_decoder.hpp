@@ -76,6 +76,10 @@ public:
     // the result are filled. Unlike Decoder, it allocates as rows need.
     Result<DecodeResult> decode(const FrameView& frame);
 
+    // Depth (z, mm) of the last decode into a CV_32FC1 of camera size, NaN
+    // where nothing was measured (as Decoder::fillDepthMap).
+    void fillDepthMap(cv::Mat& depth) const;
+
     // The matches of one row (row must be inside the frame), sorted by x.
     Result<std::vector<DpMatch>> decodeRow(const FrameView& frame, int row);
 

@@ -134,6 +134,11 @@ TEST(DpDecoder, DecodesACleanPlaneCompletelyAndCorrectly)
     // A twentieth of a stripe edge's pixel is ~0.3 mm here; box filtering
     // puts the gradient maximum within that.
     EXPECT_LT(maxDepthError, 0.5);
+
+    cv::Mat depth;
+    (*decoder)->fillDepthMap(depth);
+    ASSERT_EQ(depth.size(), image.size());
+    EXPECT_EQ(cv::countNonZero(depth == depth), static_cast<int>(result->points.size()));  // NaN != NaN
 }
 
 namespace {
