@@ -2,6 +2,7 @@
 """Plots of `stria eval`'s CSV, after the paper's figures 8 and 9.
 
 usage: plot_evaluation.py EVALUATION.csv OUTDIR
+       plot_evaluation.py --markdown EVALUATION.csv   (the table of docs/evaluation.md)
 
 Writes OUTDIR/eval-error.png (mean error and standard deviation of the inliers
 over noise, one line per contrast: figure 8), OUTDIR/eval-inliers.png (inliers
@@ -94,9 +95,34 @@ def subtitle(rows, methods):
     return text
 
 
+def cell(rows, method, field, fmt):
+    values = [float(r[f"{method}_{field}"]) for r in rows
+              if r[f"{method}_available"] == "1" and r[f"{method}_{field}"] != ""]
+    return fmt.format(np.mean(values)) if values else "n/a"
+
+
+def markdown(rows):
+    """One line per noise x contrast, averaged over scenes and seeds."""
+    print("| noise | contrast | ideal | graph inliers | graph outliers | graph mean / sd (mm) | graph ms "
+          "| DP inliers | DP outliers | DP mean / sd (mm) | DP ms |")
+    print("|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
+    keys = sorted({(float(r["noise"]), float(r["contrast"])) for r in rows}, key=lambda k: (-k[1], k[0]))
+    for noise, contrast in keys:
+        group = [r for r in rows if float(r["noise"]) == noise and float(r["contrast"]) == contrast]
+        line = [f"{noise:g}", f"{contrast:g}", f"{np.mean([float(r['ideal']) for r in group]):.0f}"]
+        for method in ("graph", "dp"):
+            line += [cell(group, method, "inliers", "{:.0f}"), cell(group, method, "outliers", "{:.0f}"),
+                     cell(group, method, "mean_error_mm", "{:+.2f}") + " / " + cell(group, method, "std_dev_mm", "{:.2f}"),
+                     cell(group, method, "decode_ms", "{:.0f}")]
+        print("| " + " | ".join(line) + " |")
+
+
 def main():
+    if len(sys.argv) == 3 and sys.argv[1] == "--markdown":
+        markdown(load(sys.argv[2]))
+        return
     if len(sys.argv) != 3:
-        sys.exit("usage: plot_evaluation.py EVALUATION.csv OUTDIR")
+        sys.exit("usage: plot_evaluation.py EVALUATION.csv OUTDIR | --markdown EVALUATION.csv")
     rows = load(sys.argv[1])
     outdir = sys.argv[2]
     methods = available_methods(rows)
