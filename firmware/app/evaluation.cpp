@@ -1,7 +1,5 @@
 #include "firmware/app/evaluation.hpp"
 
-#include "pipeline/dp/dp_decoder.hpp"
-
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -80,7 +78,7 @@ Status EvaluationConfig::validate() const
     for (double c : contrast)
         if (!(c > 0 && c <= 1)) return Status::error("contrast " + std::to_string(c) + " is not in (0, 1]");
     if (seeds < 1 || seeds > 1000) return Status::error("seeds must be 1..1000, not " + std::to_string(seeds));
-    return Status::ok();
+    return dp.validate();
 }
 
 int EvaluationConfig::frames() const
@@ -125,7 +123,7 @@ Result<std::vector<EvaluationRow>> runEvaluation(const EvaluationConfig& config,
     const double toleranceMm = 0.01 * simRig.workingDistanceMm;
     const hal::sim::SceneRenderer renderer(simRig);
 
-    auto dp = pipeline::DpDecoder::create(simRig.pattern, simRig.rig);
+    auto dp = pipeline::DpDecoder::create(simRig.pattern, simRig.rig, config.dp);
     if (!dp) return dp.status().withContext("DP baseline: ");
     auto graph = pipeline::Decoder::create(simRig.pattern, simRig.rig);
     const std::string graphMissing = graph ? "" : "graph decoder: " + graph.message();

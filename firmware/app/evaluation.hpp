@@ -6,6 +6,7 @@
 
 #include "hal/sim/scene/scene.hpp"
 #include "pipeline/decoder.hpp"
+#include "pipeline/dp/dp_decoder.hpp"
 #include "pipeline/rig.hpp"
 #include "pipeline/status.hpp"
 
@@ -23,6 +24,7 @@ struct EvaluationConfig {
     std::vector<double> noise{0, 2, 4, 8, 16};          // sigma of additive Gaussian noise, 8-bit digits
     std::vector<double> contrast{1, 0.7, 0.5, 0.3, 0.2};
     int seeds = 1;  // scene and noise seeds 1..seeds
+    pipeline::DpParams dp;  // the baseline's parameters (Zhang et al.'s by default)
 
     // The quick subset of `stria eval --quick`.
     static EvaluationConfig quick();

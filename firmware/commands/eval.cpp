@@ -22,8 +22,8 @@ namespace {
 
 constexpr const char* kUsage = R"(usage:
   stria eval [--quick] [--scenes relief,...] [--albedo NAME] [--noise 0,2,4,8,16]
-             [--contrast 1,0.7,0.5,0.3,0.2] [--seeds N] [--no-plots]
-             [--plot-script PATH] --out DIR
+             [--contrast 1,0.7,0.5,0.3,0.2] [--seeds N] [--dp-passes N]
+             [--dp-floor F] [--no-plots] [--plot-script PATH] --out DIR
 
 For every scene x noise x contrast x seed, renders a frame with the simulated
 desktop rig (camera 780x580, objects at 1000 mm), decodes it with the graph
@@ -39,6 +39,8 @@ decoder would find.
   --noise        Gaussian noise sigmas in 8-bit digits
   --contrast     pattern contrasts in (0, 1]
   --seeds        scene and noise seeds 1..N (default 1)
+  --dp-passes    passes of the multi-pass DP (default 3; 1 = plain DP)
+  --dp-floor     the DP's candidate edge floor, intensity in (0, 1) (default 0.03)
   --no-plots     write the CSV only
   --plot-script  the plotting script (default: the source tree's
                  firmware/eval/plot_evaluation.py)
@@ -132,7 +134,8 @@ int runPlotScript(const std::string& script, const std::string& csv, const std::
 
 int run(std::span<const std::string> argv)
 {
-    Args args(argv, {"scenes", "albedo", "noise", "contrast", "seeds", "plot-script", "out"}, {"quick", "no-plots"});
+    Args args(argv, {"scenes", "albedo", "noise", "contrast", "seeds", "dp-passes", "dp-floor", "plot-script", "out"},
+              {"quick", "no-plots"});
     if (!args.ok()) return usageError(kEval, args.error());
     if (!args.positional().empty()) return usageError(kEval, "unexpected argument '" + args.positional()[0] + "'");
     if (!args.require({"out"})) return usageError(kEval, args.error());
@@ -150,6 +153,8 @@ int run(std::span<const std::string> argv)
         config.albedo = *albedo;
     }
     config.seeds = static_cast<int>(args.integer("seeds", 1));
+    config.dp.passes = static_cast<int>(args.integer("dp-passes", config.dp.passes));
+    config.dp.edgeFloor = args.number("dp-floor", config.dp.edgeFloor);
     if (!args.ok()) return usageError(kEval, args.error());
     if (Status s = config.validate(); !s) return usageError(kEval, s.message());
 
