@@ -415,16 +415,23 @@ std::optional<Hit> Scene::intersect(const cv::Vec3d& origin, const cv::Vec3d& di
     case Kind::HeightField: {
         const HeightField& s = heightFields[index];
         const cv::Vec3d q = s.axes.t() * (hit.point - s.centre);
-        // Bilinear partial derivatives of the cell that holds the hit.
+        // Shading normal: the grid's central-difference slopes at the four
+        // corners of the cell, blended bilinearly, so shading is continuous
+        // across cells (the facets' own normals would print the grid).
         const double x = (std::clamp(q[0], -s.halfSize[0], s.halfSize[0]) + s.halfSize[0]) / s.spacingMm;
         const double y = (std::clamp(q[1], -s.halfSize[1], s.halfSize[1]) + s.halfSize[1]) / s.spacingMm;
         const int i = std::clamp(static_cast<int>(x), 0, s.heights.cols - 2);
         const int j = std::clamp(static_cast<int>(y), 0, s.heights.rows - 2);
         const double u = x - i, v = y - j;
-        const double* r0 = s.heights.ptr<double>(j);
-        const double* r1 = s.heights.ptr<double>(j + 1);
-        const double da = ((r0[i + 1] - r0[i]) * (1 - v) + (r1[i + 1] - r1[i]) * v) / s.spacingMm;
-        const double db = ((r1[i] - r0[i]) * (1 - u) + (r1[i + 1] - r0[i + 1]) * u) / s.spacingMm;
+        auto slope = [&](int ci, int cj) {
+            const int il = std::max(ci - 1, 0), ir = std::min(ci + 1, s.heights.cols - 1);
+            const int jl = std::max(cj - 1, 0), jr = std::min(cj + 1, s.heights.rows - 1);
+            return cv::Vec2d((s.heights.at<double>(cj, ir) - s.heights.at<double>(cj, il)) / ((ir - il) * s.spacingMm),
+                             (s.heights.at<double>(jr, ci) - s.heights.at<double>(jl, ci)) / ((jr - jl) * s.spacingMm));
+        };
+        const cv::Vec2d g = (slope(i, j) * (1 - u) + slope(i + 1, j) * u) * (1 - v) +
+                            (slope(i, j + 1) * (1 - u) + slope(i + 1, j + 1) * u) * v;
+        const double da = g[0], db = g[1];
         hit.normal = cv::normalize(s.axes * cv::Vec3d(-da, -db, 1));
         uv = {q[0], q[1]};
         texture = &s.texture;

@@ -154,7 +154,8 @@ Scene makeScene(SceneKind kind, const SimRig& simRig, Albedo albedo, std::uint64
         break;
 
     case SceneKind::TexturedRelief: {
-        // Gaussian hills and hollows on a gentle wave, slopes below ~1.
+        // Gaussian hills and hollows on a gentle wave, slopes below ~1; a
+        // 2 mm grid is within 0.02 mm of the smooth surface.
         struct Bump {
             double a, b, height, radius;
         };
@@ -173,7 +174,7 @@ Scene makeScene(SceneKind kind, const SimRig& simRig, Albedo albedo, std::uint64
         };
         const double z = 1.05 * D;
         scene.heightFields.push_back(HeightField::sample({0, 0, z}, kFacingCamera,
-                                                         {1.25 * halfWidth(z), 1.25 * halfHeight(z)}, 0.001 * D,
+                                                         {1.25 * halfWidth(z), 1.25 * halfHeight(z)}, 0.002 * D,
                                                          height, texture(white, 0.05 * D)));
         break;
     }
@@ -222,7 +223,8 @@ Scene makeScene(SceneKind kind, const SimRig& simRig, Albedo albedo, std::uint64
     case SceneKind::Fingertip: {
         // A finger pad (paraboloid, 4 mm high) seen from the front with
         // ridges 0.45 mm apart and 0.05 mm deep in loops around a core.
-        // Designed for D = 60 mm; other rigs get it scaled by D / 60.
+        // Designed for D = 60 mm; other rigs get it scaled by D / 60. The
+        // 0.05 mm grid has 9 samples per ridge (bilinear: 3% of the depth).
         const double scale = D / 60;
         const cv::Vec2d core(uniform(-2, 2) * scale, uniform(-3, 1) * scale);
         auto height = [core, scale](double a, double b) {
@@ -234,7 +236,7 @@ Scene makeScene(SceneKind kind, const SimRig& simRig, Albedo albedo, std::uint64
         const double z = D + 2 * scale;
         const cv::Vec3f skin(0.45f, 0.55f, 0.75f);
         scene.heightFields.push_back(HeightField::sample({0, 0, z}, kFacingCamera,
-                                                         {1.1 * halfWidth(z), 1.15 * halfHeight(z)}, 0.025 * scale, height,
+                                                         {1.1 * halfWidth(z), 1.15 * halfHeight(z)}, 0.05 * scale, height,
                                                          texture(skin, 2 * scale)));
         break;
     }
