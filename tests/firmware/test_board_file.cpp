@@ -1,9 +1,12 @@
 // Board files: the shipped sim board loads; every kind of mistake is an
 // error naming the file and the key.
 #include "firmware/formats/board_file.hpp"
+#include "firmware/formats/calibration_file.hpp"
+#include "firmware/formats/pattern_file.hpp"
 
 #include <gtest/gtest.h>
 
+#include <filesystem>
 #include <string>
 
 using stria::firmware::parseBoard;
@@ -94,4 +97,25 @@ TEST(BoardFile, ErrorsNameFileAndKey)
     auto missing = stria::firmware::loadBoardFile("/nonexistent/board.yaml");
     ASSERT_FALSE(missing.isOk());
     EXPECT_EQ(missing.message(), "board: cannot read '/nonexistent/board.yaml': No such file or directory");
+}
+
+TEST(BoardFile, EveryShippedBoardLoadsWithItsCalibrationAndPattern)
+{
+    int boards = 0;
+    for (const auto& entry : std::filesystem::directory_iterator(std::string(STRIA_SOURCE_DIR) + "/board")) {
+        const std::string path = entry.path().string() + "/board.yaml";
+        if (!std::filesystem::exists(path)) continue;
+        ++boards;
+        auto board = stria::firmware::loadBoardFile(path);
+        ASSERT_TRUE(board.isOk()) << board.message();
+        auto rig = stria::firmware::loadCalibrationFile(board->calibrationPath);
+        ASSERT_TRUE(rig.isOk()) << rig.message();
+        EXPECT_EQ(rig->camera().width, board->camera.width) << path;
+        EXPECT_EQ(rig->camera().height, board->camera.height) << path;
+        auto pattern = stria::firmware::loadPatternFile(board->patternPath);
+        ASSERT_TRUE(pattern.isOk()) << pattern.message();
+        EXPECT_LE(pattern->projectorColumnsUsed(), rig->projector().width) << path;
+        EXPECT_LT(board->settleMs + board->camera.exposureUs / 1000, board->light.maxOnMs) << path;
+    }
+    EXPECT_GE(boards, 1);
 }
