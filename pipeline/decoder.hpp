@@ -45,11 +45,12 @@ struct DecoderParams {
     // weight of the edge to the region's reference (the neighbour on the next
     // stripe it was decoded from) may join two regions of the same stripe.
     double nullEdgeRatio = 0.25;
-    // Gradient magnitudes up to max(gradientFloor, noiseFloorFactor * median
-    // gradient) (8-bit units) are flattened before the watershed, so the noise
-    // inside a stripe does not split it into a basin per pixel.
-    int gradientFloor = 4;
-    double noiseFloorFactor = 1.0;
+    // Gradient magnitudes up to max(gradientFloor, noiseFloorFactor * N - 1),
+    // N = median gradient along the stripes (8-bit units, a noise measure), are
+    // flattened before the watershed, so the noise inside a stripe does not
+    // split it into a basin per pixel (docs/algorithm.md).
+    int gradientFloor = 0;
+    double noiseFloorFactor = 1.1;
     // Capacities (0 = derive from the camera size). When a frame needs more,
     // decode() decodes what fits and sets DecodeResult::truncated.
     int maxSuperpixels = 0;  // default: pixels / 16

@@ -5,8 +5,11 @@
 // located with sub-pixel precision as the peak of the colour gradient along
 // the row: the gradient is projected onto the edge's expected symbol (each
 // channel divided by the regions' range, eq. 1), so texture that changes other
-// channels does not pull the peak, and a parabola through the strongest
-// half-pixel difference within +-2 px and its two neighbours gives the peak.
+// channels does not pull the peak. The strongest half-pixel difference within
+// +-2 px of the region border is the peak; the centroid of the differences
+// around it (above a quarter of its height) is the edge position. On the
+// tilted plane this halves the depth noise of a 3-point parabola (0.19 mm
+// against 0.33 mm std at noise 2; docs/algorithm.md).
 // The point is where the camera ray through (u, row) meets edge k's light plane.
 #include "pipeline/decoder/workspace.hpp"
 
@@ -17,6 +20,7 @@ namespace stria::pipeline {
 namespace {
 
 constexpr int kSearchRadius = 2;
+constexpr float kCentroidThreshold = 0.25f;
 
 }  // namespace
 
@@ -62,12 +66,17 @@ void computePoints(DecoderWorkspace& ws)
                 }
             }
             if (!(peakValue > 0)) continue;
-            float offset = 0;
-            if (peak > 0 && peak + 1 < w - 1) {
-                const float before = gradientAt(peak - 1), after = gradientAt(peak + 1);
-                const float curvature = before - 2 * peakValue + after;
-                if (curvature < 0) offset = std::clamp(0.5f * (before - after) / curvature, -0.5f, 0.5f);
+            // Centroid of the peak's samples above a quarter of its height:
+            // averages the noise over ~3 samples, and the threshold keeps the
+            // tails of the neighbouring stripe edges out.
+            float sum = 0, moment = 0;
+            for (int i = std::max(peak - kSearchRadius, 0); i <= std::min(peak + kSearchRadius, w - 2); ++i) {
+                const float g = gradientAt(i) - kCentroidThreshold * peakValue;
+                if (g <= 0) continue;
+                sum += g;
+                moment += g * static_cast<float>(i - peak);
             }
+            const float offset = moment / sum;
             const double u = peak + 0.5 + offset;
             const auto point = RigModel::intersectRay(ws.rayThroughPixel(u, y), ws.lightPlanes[edge]);
             if (!point) continue;

@@ -1,7 +1,8 @@
 // Stage 1: the colour gradient magnitude that the watershed floods.
 //
-// Per channel the central differences |dx| + |dy| (halved, so a clean step of
-// height h gives about h), the maximum over the three channels, clamped to
+// Per channel the Sobel differences |dx| + |dy| (halved, so a clean step of
+// height h gives about h; the 1-2-1 smoothing across each difference cuts the
+// noise to 61% and with it the number of noise basins), the maximum over the three channels, clamped to
 // 8 bits. The maximum keeps a stripe edge that changes only one channel as
 // strong as one that changes all three. Values at or below gradientFloor are
 // flattened to 0 so that the noise inside a stripe does not split it into a
@@ -30,7 +31,11 @@ void computeGradient(DecoderWorkspace& ws)
             const int left = 3 * std::max(x - 1, 0), right = 3 * std::min(x + 1, w - 1), here = 3 * x;
             int best = 0, bestAlong = 0;
             for (int c = 0; c < 3; ++c) {
-                const int gx = std::abs(row[right + c] - row[left + c]), gy = std::abs(down[here + c] - up[here + c]);
+                // Sobel: central differences smoothed 1-2-1 across, /4.
+                const int gx = std::abs(up[right + c] - up[left + c] + 2 * (row[right + c] - row[left + c]) +
+                                        down[right + c] - down[left + c]) / 4;
+                const int gy = std::abs(down[left + c] - up[left + c] + 2 * (down[here + c] - up[here + c]) +
+                                        down[right + c] - up[right + c]) / 4;
                 best = std::max(best, gx + gy);
                 bestAlong = std::max(bestAlong, alongY ? gy : gx);
             }
@@ -44,7 +49,7 @@ void computeGradient(DecoderWorkspace& ws)
     for (int seen = along[0]; 2 * seen < n; seen += along[++median]) {
     }
     const int floor = std::max(ws.params.gradientFloor,
-                               static_cast<int>(std::lround(ws.params.noiseFloorFactor * median)));
+                               static_cast<int>(std::lround(ws.params.noiseFloorFactor * median)) - 1);
     for (int p = 0; p < n; ++p)
         if (ws.gradient[p] <= floor) ws.gradient[p] = 0;
 }

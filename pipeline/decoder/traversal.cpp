@@ -22,6 +22,11 @@
 namespace stria::pipeline {
 namespace {
 
+// A decoded region is dropped when the border it shares with neighbours that
+// contradict its stripe is more than this many times the border of those that
+// confirm it (see rejectContradictedRegions).
+constexpr int kContradictionRatio = 2;
+
 struct Hypothesis {
     float error = 0;
     float positionError = 0;
@@ -73,6 +78,7 @@ public:
             propagate();
             ++ws_.passCount;
         }
+        rejectContradictedRegions();
         rejectSmallComponents();
     }
 
@@ -266,6 +272,47 @@ private:
             pushNeighbours(entry.region);
         }
     }
+
+    // A region decoded across a depth discontinuity by one edge that matched
+    // by chance has the pattern contradicted by its other edges across the
+    // stripes: weighed by border length, those that do not fit its stripe
+    // (error >= tokenErrorLimit for the expected symbol, not a weak null
+    // edge, neighbour not decoded consistently) against those that do. Such
+    // regions are undecoded when the contradicting border outweighs the
+    // confirming one kContradictionRatio times; a region on a true boundary
+    // keeps one confirming side, a wrongly offset one has almost none.
+    void rejectContradictedRegions()
+    {
+        const StripePattern& pattern = ws_.pattern;
+        const float limit = static_cast<float>(ws_.params.tokenErrorLimit);
+        std::int32_t* reject = ws_.componentSize.get();  // flags, before the component sizes are counted
+        for (int v = 0; v < ws_.regionCount; ++v) {
+            reject[v] = 0;
+            const Region& r = ws_.regions[v];
+            if (r.stripe < 0) continue;
+            int support = 0, contradiction = 0;
+            for (int i = 0; i < r.degree; ++i) {
+                const GraphEdge& edge = ws_.edges[ws_.adjacency[r.adjacencyBegin + i]];
+                const EdgeDirection dir = directionFrom(edge, v);
+                if (dir == EdgeDirection::Parallel) continue;
+                const int w = otherEnd(edge, v);
+                const int expected = r.stripe + (dir == EdgeDirection::Forward ? 1 : -1);
+                const int neighbour = ws_.regions[w].stripe;
+                if (neighbour == r.stripe) continue;  // a null edge within the stripe
+                bool fits = false;
+                if (expected >= 0 && expected < pattern.stripeCount() && (neighbour < 0 || neighbour == expected))
+                    fits = edgeError(v, w, edge, stripeSymbol(pattern, r.stripe, expected), nullptr) < limit;
+                if (fits) support += edge.borderCount;
+                else if (neighbour >= 0 || edge.weight >= ws_.params.nullEdgeRatio * maxChannelRange(r))
+                    contradiction += edge.borderCount;
+            }
+            reject[v] = contradiction > kContradictionRatio * support;
+        }
+        for (int v = 0; v < ws_.regionCount; ++v)
+            if (reject[v]) ws_.regions[v].stripe = -1;
+    }
+
+    static float maxChannelRange(const Region& r) { return std::max({r.range[0], r.range[1], r.range[2]}); }
 
     void rejectSmallComponents()
     {
