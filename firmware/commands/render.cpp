@@ -25,7 +25,7 @@ constexpr const char* kUsage = R"(usage:
 
 Scenes: plane, sphere, relief, clutter, fan, fingertip, tube. The rig defaults
 to the one the scene is made for (fingertip: fingerprint, tube: endoscope,
-others: desktop); the albedo to the scene's own (relief: coloured, others
+others: desktop); the albedo to the scene's own (relief: photo, others
 uniform). --noise is the sigma of additive Gaussian noise in 8-bit digits,
 --contrast the pattern contrast (0..1], --ambient the ambient light as a
 fraction of projector white. --seed fixes the scene and the noise.

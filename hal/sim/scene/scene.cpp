@@ -283,7 +283,7 @@ std::optional<Albedo> albedoFromName(std::string_view name)
     return std::nullopt;
 }
 
-Albedo defaultAlbedo(SceneKind kind) { return kind == SceneKind::TexturedRelief ? Albedo::Coloured : Albedo::Uniform; }
+Albedo defaultAlbedo(SceneKind kind) { return kind == SceneKind::TexturedRelief ? Albedo::Photo : Albedo::Uniform; }
 
 cv::Vec3f Texture::reflectance(const cv::Vec2d& uvMm) const
 {

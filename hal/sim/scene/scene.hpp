@@ -49,7 +49,7 @@ const char* sceneName(SceneKind kind);
 std::optional<SceneKind> sceneFromName(std::string_view name);
 // "uniform", "checker", "coloured", "photo"
 const char* albedoName(Albedo albedo);
-// The albedo a scene is shown with unless one is asked for (relief: coloured).
+// The albedo a scene is shown with unless one is asked for (relief: photo).
 Albedo defaultAlbedo(SceneKind kind);
 std::optional<Albedo> albedoFromName(std::string_view name);
 
