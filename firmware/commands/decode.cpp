@@ -6,6 +6,7 @@
 #include "firmware/formats/ply_file.hpp"
 #include "firmware/formats/preview.hpp"
 #include "pipeline/decoder.hpp"
+#include "pipeline/dp/dp_decoder.hpp"
 
 #include <opencv2/imgproc.hpp>
 
@@ -21,7 +22,7 @@ namespace {
 constexpr const char* kUsage = R"(usage:
   stria decode --calib CALIB.yaml --pattern PATTERN.yaml --image IN.png --ply OUT.ply
                [--depth OUT.tiff] [--preview OUT.png] [--stats] [--repeat N] [--ascii]
-               [--method graph] [--raw-format bgr8|rgb8|yuyv --raw-size WxH]
+               [--method graph|dp] [--raw-format bgr8|rgb8|yuyv --raw-size WxH]
 
 Decodes one frame of the stripe pattern into a point cloud with the graph-based
 decoder (Schmalz & Angelopoulou). The image must have exactly the calibrated
@@ -32,7 +33,9 @@ binary little-endian unless --ascii; --depth a 32-bit float TIFF of z in mm (NaN
 no data); --preview a colour-coded depth PNG with a scale bar. All outputs are
 written only if the whole decode succeeds, each atomically.
 --stats prints counts, workspace memory and per-stage times (median over
---repeat N decodes of the same frame).)";
+--repeat N decodes of the same frame).
+--method dp decodes with the scanline DP baseline of Zhang et al. instead, for
+comparison (docs/evaluation.md); --stats then prints its points and total time.)";
 
 int run(std::span<const std::string> argv);
 const Command kDecode{"decode", "decode a camera frame into a point cloud", kUsage, run};
@@ -80,8 +83,8 @@ int run(std::span<const std::string> argv)
     if (!args.ok()) return usageError(kDecode, args.error());
     if (repeat < 1 || repeat > 100000) return usageError(kDecode, "--repeat must be between 1 and 100000");
     const std::string method = args.valueOr("method", "graph");
-    if (method != "graph")
-        return usageError(kDecode, "--method '" + method + "' is not available: the only method is 'graph'");
+    if (method != "graph" && method != "dp")
+        return usageError(kDecode, "--method '" + method + "' is not one of graph, dp");
     if (args.has("raw-format") != args.has("raw-size"))
         return usageError(kDecode, "--raw-format and --raw-size go together");
 
@@ -101,21 +104,30 @@ int run(std::span<const std::string> argv)
                                      "' is for a " + std::to_string(camera.width) + "x" +
                                      std::to_string(camera.height) + " camera");
 
-    auto decoder = pipeline::Decoder::create(*pattern, *rig);
-    if (!decoder) return failure("decode", decoder.message());
+    std::unique_ptr<pipeline::Decoder> graph;
+    std::unique_ptr<pipeline::DpDecoder> dp;
+    if (method == "dp") {
+        auto created = pipeline::DpDecoder::create(*pattern, *rig);
+        if (!created) return failure("decode", created.message());
+        dp = std::move(*created);
+    } else {
+        auto created = pipeline::Decoder::create(*pattern, *rig);
+        if (!created) return failure("decode", created.message());
+        graph = std::move(*created);
+    }
     const FrameView view{frame.data, frame.cols, frame.rows, static_cast<std::ptrdiff_t>(frame.step),
                          PixelFormat::Bgr8};
     std::vector<pipeline::StageTimings> timings;
     Result<pipeline::DecodeResult> result = Status::error("not decoded");
     for (long i = 0; i < repeat; ++i) {
-        result = (*decoder)->decode(view);
+        result = dp ? dp->decode(view) : graph->decode(view);
         if (!result) return failure("decode", result.message());
         timings.push_back(result->timings);
     }
 
     // Everything is computed before anything is written; each file is atomic.
     cv::Mat depth;
-    if (args.has("depth") || args.has("preview")) (*decoder)->fillDepthMap(depth);
+    if (args.has("depth") || args.has("preview")) dp ? dp->fillDepthMap(depth) : graph->fillDepthMap(depth);
     if (Status s = writePly(*args.value("ply"), result->points, args.has("ascii")); !s) return failure("decode", s.message());
     if (args.has("depth"))
         if (Status s = writeTiffFloat(*args.value("depth"), depth); !s) return failure("decode", s.message());
@@ -124,8 +136,13 @@ int run(std::span<const std::string> argv)
 
     std::printf("decoded %s: %zu points%s -> %s\n", imagePath.c_str(), result->points.size(),
                 result->truncated ? " (truncated: a capacity was reached)" : "", args.value("ply")->c_str());
-    if (args.has("stats")) {
-        const std::size_t bytes = (*decoder)->workspaceBytes();
+    if (args.has("stats") && dp) {
+        std::vector<double> totals;
+        for (const auto& t : timings) totals.push_back(t.totalMs);
+        std::printf("DP baseline: points %zu, total %.2f ms (median of %ld)\n", result->points.size(), median(totals),
+                    repeat);
+    } else if (args.has("stats")) {
+        const std::size_t bytes = graph->workspaceBytes();
         std::printf("superpixels %d, graph edges %d, decoded regions %d, points %zu%s\n", result->superpixels,
                     result->graphEdges, result->decodedRegions, result->points.size(),
                     result->truncated ? ", truncated" : "");
