@@ -47,7 +47,7 @@ Result<std::vector<ScriptedPress>> parsePressScript(const std::string& script)
 }
 
 SimButton::SimButton(std::vector<ScriptedPress> presses, int debounceMs, bool realTime) :
-    debouncer_(std::int64_t{debounceMs} * kMs), realTime_(realTime), startNs_(monotonicNs()),
+    debouncer_(std::int64_t{debounceMs} * kMs), realTime_(realTime),
     interruptFd_(eventfd(0, EFD_CLOEXEC | EFD_NONBLOCK))
 {
     for (const ScriptedPress& p : presses) {
@@ -75,6 +75,7 @@ Result<ButtonWait> SimButton::waitForPress(std::chrono::milliseconds timeout)
 {
     // In real time, edges that came while nobody waited (during a scan) are
     // still queued on the line, as with a GPIO event queue.
+    if (startNs_ == 0) startNs_ = monotonicNs();
     if (realTime_) nowNs_ = std::max(nowNs_, monotonicNs() - startNs_);
     constexpr std::chrono::milliseconds kLongest = std::chrono::hours(24);
     const std::int64_t timeoutAt = nowNs_ + std::chrono::nanoseconds(std::min(timeout, kLongest)).count();

@@ -1,7 +1,7 @@
 #pragma once
 // The simulated scan button: replays a press script through the same
 // Debouncer a GPIO button uses. Script syntax: comma-separated press times in
-// ms from the button's creation, a "b" suffix makes that press bounce
+// ms from the first waitForPress() (the loop being ready), a "b" suffix makes that press bounce
 // ("100,900b,1500"). Each press holds the button down for kHoldMs.
 //
 // In simulated time waitForPress() returns each press at once (tests run as
@@ -47,7 +47,7 @@ private:
     std::size_t nextEdge_ = 0;
     Debouncer debouncer_;
     bool realTime_;
-    std::int64_t startNs_;
+    std::int64_t startNs_ = 0;  // monotonic time of the first wait
     std::int64_t nowNs_ = 0;   // simulated time since start
     int interruptFd_ = -1;     // eventfd: interrupt() is one write()
 };
