@@ -414,6 +414,21 @@ TEST(BoardSim, CalibrationAndPatternFilesAreTheDesktopRig)
     EXPECT_EQ(pattern->window(), 4);
 }
 
+TEST(SimRigs, RendererFindsTheWorkingDistanceFromTheGeometry)
+{
+    // Built from a RigModel alone, the renderer lights a scene like the one
+    // told the working distance.
+    for (const SimRig& rig : {desktopRig(), fingerprintRig(), endoscopeRig()}) {
+        const Scene scene = makeScene(SceneKind::TiltedPlane, rig, Albedo::Uniform, 1);
+        Rendering told, derived;
+        ASSERT_TRUE(SceneRenderer(rig).render(scene, RenderSettings{}, told));
+        ASSERT_TRUE(SceneRenderer(rig.rig, rig.pattern).render(scene, RenderSettings{}, derived));
+        EXPECT_LE(cv::norm(told.image, derived.image, cv::NORM_INF), 1.0) << rig.workingDistanceMm;
+        EXPECT_GT(cv::mean(told.image)[1], 40.0);  // neither black nor saturated
+        EXPECT_LT(cv::mean(told.image)[1], 200.0);
+    }
+}
+
 TEST(SimRigs, StripesAreAboutSevenCameraPixelsWideAtTheWorkingDistance)
 {
     for (const SimRig& rig : {desktopRig(), fingerprintRig(), endoscopeRig()}) {

@@ -172,10 +172,13 @@ struct Rendering {
 
 class SceneRenderer {
 public:
-    // The working distance is where the projector is focused unless
-    // RenderSettings::projectorFocusMm says otherwise.
-    SceneRenderer(const pipeline::RigModel& rig, const pipeline::StripePattern& pattern,
-                  double workingDistanceMm = 1000);
+    // The working distance D sets the light level (a white surface facing
+    // the projector at (0, 0, D) receives full light) and the focus unless
+    // RenderSettings::projectorFocusMm says otherwise. Without it, D is the
+    // depth where the projector's axis passes closest to the camera's (1000
+    // mm if they are parallel), which is exactly D for the built-in rigs.
+    SceneRenderer(const pipeline::RigModel& rig, const pipeline::StripePattern& pattern);
+    SceneRenderer(const pipeline::RigModel& rig, const pipeline::StripePattern& pattern, double workingDistanceMm);
     explicit SceneRenderer(const SimRig& rig) : SceneRenderer(rig.rig, rig.pattern, rig.workingDistanceMm) {}
 
     // Renders into `out`, reusing its buffers when the size matches (no reallocation per frame).

@@ -111,7 +111,25 @@ Status validateSettings(const RenderSettings& s)
     return Status::ok();
 }
 
+// Depth along the camera's axis where the projector's axis passes closest.
+double convergenceDistance(const pipeline::RigModel& rig)
+{
+    const cv::Vec3d centre = rig.projectorCentreInCamera();
+    const cv::Vec3d axis = rig.R().t() * cv::Vec3d(0, 0, 1);
+    // Closest points of (0, 0, s) and centre + u * axis.
+    const double a = axis[2], denom = 1 - a * a;
+    if (denom < 1e-12) return 1000;
+    const double u = (a * centre[2] - centre.dot(axis)) / denom;
+    const double s = centre[2] + u * a;
+    return s > 0 ? s : 1000;
+}
+
 }  // namespace
+
+SceneRenderer::SceneRenderer(const pipeline::RigModel& rig, const pipeline::StripePattern& pattern)
+    : SceneRenderer(rig, pattern, convergenceDistance(rig))
+{
+}
 
 SceneRenderer::SceneRenderer(const pipeline::RigModel& rig, const pipeline::StripePattern& pattern,
                              double workingDistanceMm)
