@@ -11,6 +11,12 @@ namespace stria::firmware {
 namespace {
 
 constexpr int kBarHeight = 44;  // scale bar strip below the image
+// A decoded depth map has values only at stripe edges (~7 px apart along a
+// row). For display, gaps up to this long between two measured pixels of one
+// row whose depths differ by less than kFillJump are filled linearly, so the
+// picture reads as a surface, as in the paper's figures; the data are not.
+constexpr int kFillGap = 16;
+constexpr double kFillJump = 0.02;
 
 // Near = red ... far = blue, through yellow, green and cyan (a turbo-like
 // ramp without the dark ends, so every valid pixel stays distinguishable from
@@ -55,12 +61,21 @@ cv::Mat depthPreview(const cv::Mat& depth, double nearMm, double farMm)
 
     const int width = std::max(depth.cols, 240);
     cv::Mat out(depth.rows + kBarHeight, width, CV_8UC3, cv::Scalar(0, 0, 0));
-    for (int y = 0; y < depth.rows; ++y)
+    auto paint = [&](int x, int y, double z) {
+        out.at<cv::Vec3b>(y, x) =
+            lut[static_cast<int>(std::lround(255.0 * std::clamp((z - nearMm) / (farMm - nearMm), 0.0, 1.0)))];
+    };
+    for (int y = 0; y < depth.rows; ++y) {
+        const float* row = depth.ptr<float>(y);
+        int last = -1;
         for (int x = 0; x < depth.cols; ++x) {
-            const float z = depth.at<float>(y, x);
-            if (valid(z)) out.at<cv::Vec3b>(y, x) = lut[static_cast<int>(std::lround(
-                              255.0 * std::clamp((z - nearMm) / (farMm - nearMm), 0.0, 1.0)))];
+            if (!valid(row[x])) continue;
+            paint(x, y, row[x]);
+            if (last >= 0 && x - last <= kFillGap && std::abs(row[x] - row[last]) < kFillJump * row[x])
+                for (int i = last + 1; i < x; ++i) paint(i, y, row[last] + (row[x] - row[last]) * (i - last) / (x - last));
+            last = x;
         }
+    }
 
     // Scale bar: the ramp with its ends and middle labelled in mm.
     const int barLeft = 10, barRight = width - 10, barTop = depth.rows + 6, barBottom = barTop + 12;

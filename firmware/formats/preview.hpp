@@ -1,7 +1,8 @@
 #pragma once
 // A colour-coded picture of a depth map for people, in the style of the
 // paper's figures: near = red ... far = blue (turbo-like), black = no data, and
-// a scale bar labelled in millimetres along the bottom.
+// a scale bar labelled in millimetres along the bottom. Short gaps along a row
+// between measured pixels of similar depth are filled for display.
 #include <opencv2/core.hpp>
 
 namespace stria::firmware {
