@@ -258,9 +258,16 @@ std::string Scanner::writeResults(ScanRecord& record, bool withOutputs)
     // a reader never sees a scan folder with some of its files missing.
     const std::string staging = options_.outDir + "/." + name + ".tmp";
     std::error_code ec;
-    fs::create_directory(staging, ec);
-    Status status = ec ? Status::error("cannot create '" + staging + "': " + ec.message()) : Status::ok();
+    const auto nothingSaved = [&](const Status& why) {
+        fs::remove_all(staging, ec);
+        record.ok = false;
+        record.error += (record.error.empty() ? "" : "; ") + ("nothing saved: " + why.message());
+        return std::string();
+    };
+    if (!fs::create_directory(staging, ec) || ec)
+        return nothingSaved(Status::error("cannot create '" + staging + "': " + (ec ? ec.message() : "it exists")));
 
+    Status status;
     const auto write = [&](const std::string& file, auto&& writer) {
         if (!status) return;
         status = writer(staging + "/" + file);
@@ -272,7 +279,7 @@ std::string Scanner::writeResults(ScanRecord& record, bool withOutputs)
         write("depth.tiff", [&](const std::string& p) { return writeTiffFloat(p, depth_); });
         write("preview.png", [&](const std::string& p) { return writePng(p, depthPreview(depth_)); });
         if (!status) {
-            // The scan itself worked; say why its results are missing.
+            // The scan itself worked; the record says why its results are missing.
             record.ok = false;
             record.error = "results not saved: " + status.message();
             record.files.clear();
@@ -284,19 +291,13 @@ std::string Scanner::writeResults(ScanRecord& record, bool withOutputs)
     const std::int64_t nowNs = hal::monotonicNs();
     record.writeMs = msBetween(writeStartNs, nowNs);
     record.totalMs = msBetween(record.pressNs, nowNs);
-    write("scan.json", [&](const std::string& p) { return writeScanRecord(p, record); });
+    status = writeScanRecord(staging + "/scan.json", record);
     if (status) {
         fs::rename(staging, folder, ec);
         if (ec) status = Status::error("cannot rename '" + staging + "' to '" + folder + "': " + ec.message());
     }
     if (status) status = syncDirectory(options_.outDir);
-    if (!status) {
-        fs::remove_all(staging, ec);
-        logError("scan %llu: nothing saved: %s", static_cast<unsigned long long>(record.scan), status.message().c_str());
-        record.ok = false;
-        if (record.error.empty()) record.error = "nothing saved: " + status.message();
-        return {};
-    }
+    if (!status) return nothingSaved(status);
     return folder;
 }
 
