@@ -151,7 +151,7 @@ struct RenderSettings {
     cv::Matx33d crosstalk = cv::Matx33d::eye();  // camera colour crosstalk (rows: sensor R,G,B; cols: light R,G,B)
     bool bayer = false;             // RGGB mosaic + bilinear demosaic
     int samplesPerPixel = 4;        // anti-aliasing (supersampling grid n x n with n = sqrt)
-    double projectorFocusMm = 0;    // 0 = the rig's working distance; defocus grows away from it
+    double projectorFocusMm = 0;    // sharp projector depth; 0 = that of (0, 0, D); defocus grows away from it
     double projectorBlurPx = 0.5;   // blur sigma (in projector px) at the focus distance
     // Thin-lens defocus: sigma = projectorBlurPx + projectorDefocusPx * |focus / z - 1|
     // (z = depth along the projector axis); projectorDefocusPx = aperture * f / (4 * focus).
