@@ -150,16 +150,24 @@ void Streamer::printStats(const char* label, const StreamStats& s) const
     if (!options_.report) return;
     const pipeline::StageTimings& m = s.median;
     const std::uint64_t good = s.decoded - s.failed;
-    // One fprintf per line: the watchdog thread also writes to stderr.
-    std::fprintf(options_.report,
-                 "%s: %.1f fps over %.1f s; %llu captured, %llu decoded (%llu failed), %llu dropped, %llu missed; "
-                 "%.0f points/frame; decode busy %.0f%%; median ms: total %.2f = gradient %.2f + watershed %.2f + "
-                 "regions %.2f + graph %.2f + edges %.2f + traversal %.2f + depth %.2f\n",
-                 label, s.fps(), s.seconds, static_cast<unsigned long long>(s.captured),
-                 static_cast<unsigned long long>(s.decoded), static_cast<unsigned long long>(s.failed),
-                 static_cast<unsigned long long>(s.dropped), static_cast<unsigned long long>(s.missed),
-                 good > 0 ? static_cast<double>(s.points) / static_cast<double>(good) : 0.0, 100.0 * s.decodeBusy,
-                 m.totalMs, m.gradientMs, m.watershedMs, m.regionsMs, m.graphMs, m.edgesMs, m.decodeMs, m.depthMs);
+    // Formatted in pieces of few conversions into one buffer: libquadmath
+    // (linked through OpenCV) registers printf extensions, which sends glibc's
+    // printf down a path that mallocs for formats with many conversions, and
+    // a progress line must not allocate. One write per line: the watchdog
+    // thread writes to stderr too.
+    char line[512];
+    int n = std::snprintf(line, sizeof line, "%s: %.1f fps over %.1f s; %llu captured, %llu decoded (%llu failed), ",
+                          label, s.fps(), s.seconds, static_cast<unsigned long long>(s.captured),
+                          static_cast<unsigned long long>(s.decoded), static_cast<unsigned long long>(s.failed));
+    n += std::snprintf(line + n, sizeof line - n, "%llu dropped, %llu missed; %.0f points/frame; decode busy %.0f%%; ",
+                       static_cast<unsigned long long>(s.dropped), static_cast<unsigned long long>(s.missed),
+                       good > 0 ? static_cast<double>(s.points) / static_cast<double>(good) : 0.0,
+                       100.0 * s.decodeBusy);
+    n += std::snprintf(line + n, sizeof line - n, "median ms: total %.2f = gradient %.2f + watershed %.2f + regions %.2f",
+                       m.totalMs, m.gradientMs, m.watershedMs, m.regionsMs);
+    std::snprintf(line + n, sizeof line - n, " + graph %.2f + edges %.2f + traversal %.2f + depth %.2f\n", m.graphMs,
+                  m.edgesMs, m.decodeMs, m.depthMs);
+    std::fputs(line, options_.report);
     std::fflush(options_.report);
 }
 

@@ -1,0 +1,166 @@
+// Whole-frame decode on simulator frames, with references measured in the
+// same run on the same frame: one 3x3 Sobel pass of OpenCV (x derivative,
+// CV_16S, on the BGR frame the decoder reads and on its grey version) and the
+// DP baseline. tests/bench/run-benchmarks.sh turns the medians into ratios.
+#include "tests/bench/bench_frames.hpp"
+
+#include "pipeline/decoder.hpp"
+#include "pipeline/dp/dp_decoder.hpp"
+
+#include <benchmark/benchmark.h>
+#include <opencv2/imgproc.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <vector>
+
+namespace stria::bench {
+namespace {
+
+// A decode this far off the ground truth is broken, not slow: the benchmark
+// reports an error (and the suite exits non-zero) instead of a time. The
+// quality targets proper are test_decoder_quality's; these bounds only keep
+// a decode that measures wrong depths or next to nothing from being timed.
+constexpr double kMaxMedianDepthError = 0.01;  // relative to the true depth
+constexpr double kMinCoverage = 0.05;          // points / ideal (row, edge) crossings
+
+double median(std::vector<double> values)
+{
+    if (values.empty()) return 0;
+    auto middle = values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2);
+    std::nth_element(values.begin(), middle, values.end());
+    return *middle;
+}
+
+// Median |z - true z| / true z over the points, at the pixel each was found in.
+double medianDepthError(std::span<const pipeline::ScanPoint> points, const cv::Mat& truth)
+{
+    std::vector<double> errors;
+    errors.reserve(points.size());
+    for (const pipeline::ScanPoint& p : points) {
+        const int x = static_cast<int>(std::lround(p.pixel.x)), y = static_cast<int>(std::lround(p.pixel.y));
+        if (x < 0 || y < 0 || x >= truth.cols || y >= truth.rows) continue;
+        const float z = truth.at<float>(y, x);
+        if (std::isfinite(z)) errors.push_back(std::abs(p.position[2] - z) / z);
+    }
+    return errors.empty() ? 1.0 : median(std::move(errors));
+}
+
+const BenchFrame* frameOrSkip(benchmark::State& state, FrameSize size)
+{
+    const BenchFrame* frame = benchFrame(size);
+    if (!frame) state.SkipWithError("the simulator could not render the frame");
+    return frame;
+}
+
+void decode(benchmark::State& state, FrameSize size)
+{
+    const BenchFrame* frame = frameOrSkip(state, size);
+    if (!frame) return;
+    auto decoder = pipeline::Decoder::create(frame->rig.pattern, frame->rig.rig);
+    if (!decoder) {
+        state.SkipWithError(decoder.message().c_str());
+        return;
+    }
+    const FrameView view = viewOf(frame->rendering.image);
+    std::vector<pipeline::StageTimings> timings;
+    timings.reserve(100000);
+    pipeline::DecodeResult last;
+    for (auto _ : state) {
+        auto result = (*decoder)->decode(view);
+        if (!result) {
+            state.SkipWithError(result.message().c_str());
+            break;
+        }
+        last = *result;
+        if (timings.size() < timings.capacity()) timings.push_back(result->timings);
+    }
+    if (timings.empty()) return;
+
+    const double depthError = medianDepthError(last.points, frame->rendering.depth);
+    const double coverage = static_cast<double>(last.points.size()) /
+                            std::max(1, hal::sim::idealEdgeCrossings(frame->rendering, frame->rig.pattern));
+    if (depthError > kMaxMedianDepthError || coverage < kMinCoverage) {
+        const std::string why = "the decode is wrong: median depth error " + std::to_string(100 * depthError) +
+                                " % (limit " + std::to_string(100 * kMaxMedianDepthError) + "), coverage " +
+                                std::to_string(coverage) + " (limit " + std::to_string(kMinCoverage) + "), " +
+                                std::to_string(last.points.size()) + " points";
+        state.SkipWithError(why.c_str());
+        return;
+    }
+    const double pixels = static_cast<double>(view.width) * view.height;
+    auto& c = state.counters;
+    c["points"] = static_cast<double>(last.points.size());
+    c["superpixels"] = last.superpixels;
+    c["graph_edges"] = last.graphEdges;
+    c["coverage"] = coverage;
+    c["depth_err_rel"] = depthError;
+    c["workspace_bytes"] = static_cast<double>((*decoder)->workspaceBytes());
+    c["bytes_per_pixel"] = static_cast<double>((*decoder)->workspaceBytes()) / pixels;
+    c["pixels"] = benchmark::Counter(pixels, benchmark::Counter::kIsIterationInvariantRate);
+    // Stage medians from the decoder's own clock (StageTimings), in ms.
+    const auto stage = [&](const char* name, double pipeline::StageTimings::*field) {
+        std::vector<double> values(timings.size());
+        std::transform(timings.begin(), timings.end(), values.begin(), [&](const auto& t) { return t.*field; });
+        c[name] = median(std::move(values));
+    };
+    stage("ms_gradient", &pipeline::StageTimings::gradientMs);
+    stage("ms_watershed", &pipeline::StageTimings::watershedMs);
+    stage("ms_regions", &pipeline::StageTimings::regionsMs);
+    stage("ms_graph", &pipeline::StageTimings::graphMs);
+    stage("ms_edges", &pipeline::StageTimings::edgesMs);
+    stage("ms_traversal", &pipeline::StageTimings::decodeMs);
+    stage("ms_depth", &pipeline::StageTimings::depthMs);
+    stage("ms_total", &pipeline::StageTimings::totalMs);
+}
+
+void sobel(benchmark::State& state, FrameSize size, bool grey)
+{
+    const BenchFrame* frame = frameOrSkip(state, size);
+    if (!frame) return;
+    const cv::Mat& src = grey ? frame->grey : frame->rendering.image;
+    cv::Mat dst(src.size(), CV_16SC(src.channels()));
+    for (auto _ : state) {
+        cv::Sobel(src, dst, CV_16S, 1, 0, 3);
+        benchmark::DoNotOptimize(dst.data);
+        benchmark::ClobberMemory();
+    }
+    state.counters["pixels"] =
+        benchmark::Counter(static_cast<double>(src.total()), benchmark::Counter::kIsIterationInvariantRate);
+}
+
+void dpBaseline(benchmark::State& state, FrameSize size)
+{
+    const BenchFrame* frame = frameOrSkip(state, size);
+    if (!frame) return;
+    auto decoder = pipeline::DpDecoder::create(frame->rig.pattern, frame->rig.rig);
+    if (!decoder) {
+        state.SkipWithError(decoder.message().c_str());
+        return;
+    }
+    const FrameView view = viewOf(frame->rendering.image);
+    std::size_t points = 0;
+    for (auto _ : state) {
+        auto result = (*decoder)->decode(view);
+        if (!result) {
+            state.SkipWithError(result.message().c_str());
+            break;
+        }
+        points = result->points.size();
+    }
+    state.counters["points"] = static_cast<double>(points);
+}
+
+}  // namespace
+
+BENCHMARK_CAPTURE(decode, 780x580, FrameSize::Small)->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(decode, 1388x1038, FrameSize::Large)->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(sobel, bgr_780x580, FrameSize::Small, false)->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(sobel, grey_780x580, FrameSize::Small, true)->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(sobel, bgr_1388x1038, FrameSize::Large, false)->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(sobel, grey_1388x1038, FrameSize::Large, true)->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(dpBaseline, 780x580, FrameSize::Small)->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(dpBaseline, 1388x1038, FrameSize::Large)->Unit(benchmark::kMillisecond);
+
+}  // namespace stria::bench
