@@ -13,8 +13,10 @@
 //     has the same symbol). Edges above A pass only on a token from the
 //     bucket, which good edges refill. A region reached again with another
 //     stripe keeps the one with the lower position error Q (eq. 10).
-// Afterwards components (regions decoded by one pass) with fewer than
-// minComponentRegions regions are dropped as false positives.
+// Afterwards three checks drop false positives: regions whose edges across the
+// stripes mostly contradict their stripe, regions without window() confirmed
+// stripe edges around them (the window property, locally), and components
+// (regions decoded by one pass) with fewer than minComponentRegions regions.
 #include "pipeline/decoder/workspace.hpp"
 
 #include <algorithm>
@@ -26,6 +28,13 @@ namespace {
 // contradict its stripe is more than this many times the border of those that
 // confirm it (see rejectContradictedRegions).
 constexpr int kContradictionRatio = 2;
+
+// A null edge's error adds its border's mean gradient (per pixel pair, summed
+// over channels) relative to the reference edge's weight, times this: the
+// paper's gradient term (eq. 8) for edges that should show no change. Two
+// surfaces of similar colour meeting at a depth step show the misaligned
+// stripes along their border; a stripe split by the watershed shows noise.
+constexpr float kNullBorderWeight = 0.5f;
 
 struct Hypothesis {
     float error = 0;
@@ -79,6 +88,7 @@ public:
             ++ws_.passCount;
         }
         rejectContradictedRegions();
+        rejectShortRuns();
         rejectSmallComponents();
     }
 
@@ -211,7 +221,9 @@ private:
                 const SymbolCode expected = stripeSymbol(pattern, ref.stripe, f.stripe);
                 const EqualizedChange change = equalizedChange(ws_, f.reference, to);
                 if (optimalSymbol(change.c, t_) == expected) {
-                    const float error = matchError(change.c, expected, t_);
+                    const float border = (edge.primaryGradient + edge.secondaryGradient) / std::max(edge.borderCount, 1);
+                    const float error = matchError(change.c, expected, t_) +
+                                        kNullBorderWeight * border / std::max(referenceWeight, 1.0f);
                     if (error < best.error)
                         best = {error, beta_ * error / std::max(change.weight, 1.0f), f.stripe, f.reference};
                 }
@@ -310,6 +322,59 @@ private:
         }
         for (int v = 0; v < ws_.regionCount; ++v)
             if (reject[v]) ws_.regions[v].stripe = -1;
+    }
+
+    // The window property, region by region: a region keeps its stripe only
+    // if, following confirmed stripe edges (consecutive stripes in the right
+    // direction whose symbol fits, error < tokenErrorLimit; same-stripe
+    // neighbours pass through), window() edges of pattern evidence surround
+    // it: run to the left + run to the right >= window(). Narrow patches
+    // reached across a depth step by one chance match (the wall between the
+    // slats of a fan) cannot show that much evidence.
+    void rejectShortRuns()
+    {
+        const StripePattern& pattern = ws_.pattern;
+        const int window = pattern.window();
+        const float limit = static_cast<float>(ws_.params.tokenErrorLimit);
+        std::int32_t* runs = ws_.componentSize.get();  // left run in the low, right run in the high 16 bits
+        for (int v = 0; v < ws_.regionCount; ++v) runs[v] = 0;
+        auto left = [&](int v) { return runs[v] & 0xffff; };
+        auto right = [&](int v) { return runs[v] >> 16; };
+        // Confirmed links, evaluated once: flag per edge in edgeOrder (free after seeding).
+        std::int32_t* link = ws_.edgeOrder.get();
+        for (int e = 0; e < ws_.edgeCount; ++e) {
+            const GraphEdge& edge = ws_.edges[e];
+            link[e] = 0;
+            const int sa = ws_.regions[edge.a].stripe, sb = ws_.regions[edge.b].stripe;
+            if (sa < 0 || sb < 0 || edge.direction == EdgeDirection::Parallel) continue;
+            const int step = edge.direction == EdgeDirection::Forward ? 1 : -1;  // b = a + step if consecutive
+            if (sb == sa) link[e] = 1;  // same stripe: passes the run through
+            else if (sb == sa + step && edgeError(edge.a, edge.b, edge, stripeSymbol(pattern, sa, sb), nullptr) < limit)
+                link[e] = 2;
+        }
+        for (int sweep = 0; sweep < 2 * window + 2; ++sweep) {
+            bool changed = false;
+            for (int e = 0; e < ws_.edgeCount; ++e) {
+                if (!link[e]) continue;
+                const GraphEdge& edge = ws_.edges[e];
+                const int add = link[e] == 2 ? 1 : 0;
+                // lo = the region on the left (lower stripe side), hi = on the right.
+                const bool aLeft = edge.direction == EdgeDirection::Forward;
+                const int lo = aLeft ? edge.a : edge.b, hi = aLeft ? edge.b : edge.a;
+                const int newRight = std::min(window, right(hi) + add), newLeft = std::min(window, left(lo) + add);
+                if (newRight > right(lo)) {
+                    runs[lo] = (newRight << 16) | left(lo);
+                    changed = true;
+                }
+                if (newLeft > left(hi)) {
+                    runs[hi] = (right(hi) << 16) | newLeft;
+                    changed = true;
+                }
+            }
+            if (!changed) break;
+        }
+        for (int v = 0; v < ws_.regionCount; ++v)
+            if (ws_.regions[v].stripe >= 0 && left(v) + right(v) < window) ws_.regions[v].stripe = -1;
     }
 
     static float maxChannelRange(const Region& r) { return std::max({r.range[0], r.range[1], r.range[2]}); }
