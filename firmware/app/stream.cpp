@@ -118,6 +118,10 @@ void Streamer::captureLoop()
         lock.unlock();
         queued_.notify_one();
     }
+    // No frame needs the light any more: off now, not after the ring is
+    // drained (which the watchdog would take for a hung camera).
+    watchdog_->disarm();
+    (void)light_.set(false);
     {
         std::lock_guard lock(mutex_);
         captureDone_ = true;

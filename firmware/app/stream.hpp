@@ -12,8 +12,9 @@
 // dropped, so captured = decoded + dropped once run() has returned. Sensor
 // frames the capture thread never collected (sequence gaps) count as missed.
 //
-// The LED goes off on every way out of run(), on requestStop() (a signal) and,
-// if no frame arrives for light.max_on_ms, by the LedWatchdog that each
+// The LED goes off as soon as capturing ends (before the frames left in the
+// ring are decoded), on every way out of run(), on requestStop() (a signal)
+// and, if no frame arrives for light.max_on_ms, by the LedWatchdog that each
 // captured frame re-arms.
 #include "firmware/app/led_watchdog.hpp"
 #include "hal/camera.hpp"

@@ -13,6 +13,7 @@
 #include <signal.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cerrno>
 #include <chrono>
@@ -170,12 +171,12 @@ TEST_F(StreamTest, AFastCameraFillsTheRingAndEveryFrameIsDecodedOrDropped)
     EXPECT_EQ(summary.stats.missed, 0u);  // interval 0: no sensor frame passes uncollected
     EXPECT_GT(summary.stats.points, 1000u * summary.stats.decoded);
     EXPECT_GT(summary.stats.median.totalMs, 0.0);
-    // On once for the whole stream, then off.
+    // Off at create, on once for the whole stream, then only off.
     const auto changes = ledChangesSince(startNs);
-    ASSERT_EQ(changes.size(), 3u);  // off at create, on, off
+    ASSERT_GE(changes.size(), 3u);
     EXPECT_FALSE(changes[0].on);
     EXPECT_TRUE(changes[1].on);
-    EXPECT_FALSE(changes[2].on);
+    EXPECT_EQ(std::count_if(changes.begin(), changes.end(), [](const auto& e) { return e.on; }), 1);
     EXPECT_FALSE(light_.isOn());
 }
 
