@@ -70,6 +70,21 @@ void computeEdgeFeatures(DecoderWorkspace& ws)
 {
     Region* regions = ws.regions.get();
     for (int e = 0; e < ws.edgeCount; ++e) {
+        GraphEdge& edge = ws.edges[e];
+        // Direction: the border's normal (from a to b); if the border is
+        // closed or ragged (its chord is short) the centroids decide instead.
+        float nx = static_cast<float>(edge.normalX), ny = static_cast<float>(edge.normalY);
+        if (std::hypot(nx, ny) < 0.25f * static_cast<float>(edge.borderCount)) {
+            nx = regions[edge.b].centroidX - regions[edge.a].centroidX;
+            ny = regions[edge.b].centroidY - regions[edge.a].centroidY;
+        }
+        const float length = std::hypot(nx, ny);
+        const float along = length > 0 ? (nx * ws.primary[0] + ny * ws.primary[1]) / length : 0.0f;
+        edge.direction = along >= kCos45    ? EdgeDirection::Forward
+                         : along <= -kCos45 ? EdgeDirection::Backward
+                                            : EdgeDirection::Parallel;
+    }
+    for (int e = 0; e < ws.edgeCount; ++e) {
         const GraphEdge& edge = ws.edges[e];
         for (int c = 0; c < 3; ++c) {
             const float change = std::abs(regions[edge.b].color[c] - regions[edge.a].color[c]);
@@ -87,19 +102,6 @@ void computeEdgeFeatures(DecoderWorkspace& ws)
                                  : kMaxGradientError;
         edge.bestSymbol = optimalSymbol(change.c, t);
         edge.bestError = matchError(change.c, edge.bestSymbol, t) + alpha * edge.gradientError;
-
-        // Direction: the border's normal (from a to b); if the border is
-        // closed or ragged (its chord is short) the centroids decide instead.
-        float nx = static_cast<float>(edge.normalX), ny = static_cast<float>(edge.normalY);
-        if (std::hypot(nx, ny) < 0.25f * static_cast<float>(edge.borderCount)) {
-            nx = regions[edge.b].centroidX - regions[edge.a].centroidX;
-            ny = regions[edge.b].centroidY - regions[edge.a].centroidY;
-        }
-        const float length = std::hypot(nx, ny);
-        const float along = length > 0 ? (nx * ws.primary[0] + ny * ws.primary[1]) / length : 0.0f;
-        edge.direction = along >= kCos45    ? EdgeDirection::Forward
-                         : along <= -kCos45 ? EdgeDirection::Backward
-                                            : EdgeDirection::Parallel;
     }
 }
 

@@ -36,22 +36,23 @@ void computeRegions(DecoderWorkspace& ws)
     for (int r = 0; r < count; ++r) {
         Region& region = regions[r];
         const int size = region.pixelCount;
+        // One pass over the pixels: coordinate sums and the three channels
+        // copied to consecutive runs of the scratch (3 x size <= 4 x pixels).
         long long sx = 0, sy = 0;
+        std::uint8_t* channel[3] = {bytes, bytes + size, bytes + 2 * size};
         for (int i = 0; i < size; ++i) {
-            sx += pixels[i] % w;
-            sy += pixels[i] / w;
+            const int y = pixels[i] / w, x = pixels[i] - y * w;
+            sx += x;
+            sy += y;
+            const std::uint8_t* px = ws.frame.row(y) + 3 * x;
+            for (int c = 0; c < 3; ++c) channel[c][i] = px[ws.rgbOffset[c]];
         }
         region.centroidX = static_cast<float>(static_cast<double>(sx) / size);
         region.centroidY = static_cast<float>(static_cast<double>(sy) / size);
         cv::Vec3f median;
         for (int c = 0; c < 3; ++c) {
-            const int off = ws.rgbOffset[c];
-            for (int i = 0; i < size; ++i) {
-                const int p = pixels[i];
-                bytes[i] = ws.frame.row(p / w)[3 * (p % w) + off];
-            }
-            std::nth_element(bytes, bytes + size / 2, bytes + size);
-            median[c] = bytes[size / 2];
+            std::nth_element(channel[c], channel[c] + size / 2, channel[c] + size);
+            median[c] = channel[c][size / 2];
         }
         const cv::Vec3f corrected = m * median;
         region.color = {corrected[0], corrected[1], corrected[2]};

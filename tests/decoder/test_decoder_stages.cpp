@@ -8,7 +8,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include <cmath>
-#include <set>
+#include <vector>
 
 namespace stria::pipeline {
 namespace {
@@ -80,6 +80,26 @@ TEST(DecoderStages, RgbFramesDecodeLikeBgr)
     auto result = (*decoder)->decode(viewOf(rgb, PixelFormat::Rgb8));
     ASSERT_TRUE(result);
     EXPECT_EQ(result->decodedRegions, c.pattern.stripeCount());
+}
+
+TEST(DecoderStages, StridedViewDecodesLikeAContiguousFrame)
+{
+    SlideCase c;
+    // The frame as a window into a wider buffer: stride != 3 * width.
+    cv::Mat wide(c.slide.rows, c.slide.cols + 37, CV_8UC3, cv::Scalar(0, 0, 255));
+    c.slide.copyTo(wide.colRange(0, c.slide.cols));
+    const cv::Mat window = wide.colRange(0, c.slide.cols);
+    auto decoder = Decoder::create(c.pattern, c.rig);
+    auto contiguous = (*decoder)->decode(viewOf(c.slide));
+    ASSERT_TRUE(contiguous);
+    const std::vector<ScanPoint> expected(contiguous->points.begin(), contiguous->points.end());
+    auto strided = (*decoder)->decode(viewOf(window));
+    ASSERT_TRUE(strided);
+    ASSERT_EQ(strided->points.size(), expected.size());
+    for (std::size_t i = 0; i < expected.size(); ++i) {
+        EXPECT_EQ(strided->points[i].pixel, expected[i].pixel);
+        EXPECT_EQ(strided->points[i].edge, expected[i].edge);
+    }
 }
 
 TEST(DecoderStages, SubPixelEdgesOnBlurredNoisySlideWithinATenthOfAPixel)
