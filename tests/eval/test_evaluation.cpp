@@ -97,8 +97,10 @@ TEST(Evaluation, DpBaselineDecodesTheCleanSimulatedPlane)
 }
 
 // One scene, noise 2 and 8, contrast 1, seed 1: the CSV has the documented
-// columns and one line per frame.
-TEST(Evaluation, SmallSweep)
+// columns and one line per frame, and at noise 8 the graph decoder finds
+// more inliers than the DP baseline and a tenth of its outliers or fewer
+// (measured: 59429 against 38714 inliers, 39 against 24011 outliers).
+TEST(Evaluation, GraphDecoderBeatsTheDpBaselineAtNoise8)
 {
     EvaluationConfig config;
     config.scenes = {SceneKind::TexturedRelief};
@@ -138,4 +140,6 @@ TEST(Evaluation, SmallSweep)
     EXPECT_GT(noisy.ideal, 50000);
     EXPECT_LE(noisy.graph.inliers, noisy.ideal);
     EXPECT_LE(noisy.dp.inliers, noisy.ideal);
+    EXPECT_GT(noisy.graph.inliers, noisy.dp.inliers * 5 / 4);
+    EXPECT_LE(noisy.graph.outliers * 10, noisy.dp.outliers);
 }
