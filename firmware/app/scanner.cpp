@@ -15,6 +15,7 @@
 #include <cerrno>
 #include <chrono>
 #include <cstring>
+#include <exception>
 #include <cstdio>
 #include <ctime>
 #include <filesystem>
@@ -229,11 +230,25 @@ ScanResult Scanner::scanOnce(std::int64_t pressNs)
 
     auto frame = captureLit(record);
     record.captureMs = msBetween(record.ledOnNs ? record.ledOnNs : pressNs, record.ledOffNs);
-    Status status = frame ? decodeFrame(*frame, record) : frame.status();
+    // Our code reports errors as Status; OpenCV and the C++ library may still
+    // throw (bad_alloc, cv::Exception). A daemon turns that into a failed scan.
+    Status status;
+    try {
+        status = frame ? decodeFrame(*frame, record) : frame.status();
+    } catch (const std::exception& e) {
+        status = Status::error(std::string("decoding threw: ") + e.what());
+    }
     record.ok = status.isOk();
     record.error = status.message();
     record.totalMs = msBetween(pressNs, hal::monotonicNs());
-    out.folder = options_.writeOutputs ? writeResults(record, record.ok) : std::string();
+    if (options_.writeOutputs) {
+        try {
+            out.folder = writeResults(record, record.ok);
+        } catch (const std::exception& e) {
+            record.ok = false;
+            record.error += (record.error.empty() ? "" : "; ") + std::string("writing results threw: ") + e.what();
+        }
+    }
 
     if (record.ok) {
         logInfo("scan %llu: %d points%s, decode %.1f ms, total %.1f ms%s%s",
