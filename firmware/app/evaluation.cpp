@@ -54,8 +54,15 @@ void appendMethod(std::string& line, const MethodScore& s)
         line += ",0,,,,,,";
         return;
     }
-    std::snprintf(buffer, sizeof buffer, ",1,%ld,%ld,%ld,%.4f,%.4f,%.2f", s.points, s.inliers, s.outliers,
-                  s.meanErrorMm, s.stdDevMm, s.decodeMs);
+    std::snprintf(buffer, sizeof buffer, ",1,%ld,%ld,%ld", s.points, s.inliers, s.outliers);
+    line += buffer;
+    if (s.inliers > 0) {
+        std::snprintf(buffer, sizeof buffer, ",%.4f,%.4f", s.meanErrorMm, s.stdDevMm);
+        line += buffer;
+    } else {
+        line += ",,";  // no inliers: no error statistics
+    }
+    std::snprintf(buffer, sizeof buffer, ",%.2f", s.decodeMs);
     line += buffer;
 }
 

@@ -66,7 +66,8 @@ Result<std::vector<EvaluationRow>> runEvaluation(const EvaluationConfig& config,
 MethodScore scorePoints(std::span<const pipeline::ScanPoint> points, const hal::sim::Rendering& truth,
                         const pipeline::RigModel& rig, double inlierToleranceMm);
 
-// The CSV (header + one line per row); unavailable methods have empty fields.
+// The CSV (header + one line per row); unavailable methods have empty
+// fields, and so have the mean error and deviation of a method without inliers.
 extern const char* const kEvaluationCsvHeader;
 std::string evaluationCsv(std::span<const EvaluationRow> rows);
 

@@ -64,6 +64,28 @@ TEST(Evaluation, ScoresPointsAlongTheirRays)
     EXPECT_NEAR(s.stdDevMm, std::sqrt((1.0 + 25.0 + 36.0) / 3.0), 1e-3);
 }
 
+// No fake numbers: an unavailable decoder leaves its fields empty, and a
+// decoder without inliers has no mean error or deviation.
+TEST(Evaluation, CsvLeavesWhatWasNotMeasuredEmpty)
+{
+    EvaluationRow row;
+    row.scene = SceneKind::TexturedRelief;
+    row.albedo = Albedo::Coloured;
+    row.noise = 16;
+    row.contrast = 0.2;
+    row.seed = 3;
+    row.ideal = 65502;
+    row.graph.unavailableReason = "graph decoder: not built";
+    row.dp.available = true;
+    row.dp.points = 12;
+    row.dp.outliers = 12;
+    row.dp.decodeMs = 250.5;
+    const std::vector<std::string> csvLines = lines(evaluationCsv({&row, 1}));
+    ASSERT_EQ(csvLines.size(), 2u);
+    EXPECT_EQ(csvLines[0], kEvaluationCsvHeader);
+    EXPECT_EQ(csvLines[1], "relief,coloured,16,0.2,3,65502,0,,,,,,,1,12,0,12,,,250.50");
+}
+
 TEST(Evaluation, RejectsAnEmptyOrOutOfRangeSweep)
 {
     EvaluationConfig config;
