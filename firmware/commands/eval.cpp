@@ -34,8 +34,8 @@ decoder would find.
 
   --quick        noise 2,8 and contrast 1,0.5 (unless given)
   --scenes       plane, sphere, relief, clutter, fan, fingertip, tube (default relief)
-  --albedo       uniform, checker, coloured, photo (default: the scene's own;
-                 relief is strongly coloured, like the paper's 'sun')
+  --albedo       uniform, checker, coloured, photo (default: each scene's own,
+                 as in stria render: relief photo, the others uniform)
   --noise        Gaussian noise sigmas in 8-bit digits
   --contrast     pattern contrasts in (0, 1]
   --seeds        scene and noise seeds 1..N (default 1)
