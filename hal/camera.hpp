@@ -8,6 +8,8 @@
 
 #include <chrono>
 #include <cstdint>
+#include <string>
+#include <vector>
 
 namespace stria::hal {
 
@@ -35,6 +37,9 @@ public:
     virtual void stop() = 0;
     // Waits at most `timeout` for the next frame. Timeout -> error "camera '<dev>': no frame within N ms".
     virtual Result<CapturedFrame> capture(std::chrono::milliseconds timeout) = 0;
+    // Controls the device lacks (e.g. a UVC camera without manual exposure),
+    // known after configure(). Backends that can set everything keep the default.
+    virtual std::vector<std::string> missingControls() const { return {}; }
 };
 
 }  // namespace stria::hal

@@ -115,6 +115,9 @@ Result<std::unique_ptr<Scanner>> Scanner::create(const BoardConfig& board, Devic
     config.analogueGain = board.camera.gain;
     config.bufferCount = board.camera.bufferCount;
     if (Status st = camera.configure(config); !st) return st;
+    for (const std::string& control : camera.missingControls())
+        logWarning("stria: camera %s has no '%s' control: the scan runs with the camera's own setting",
+                   camera.backendName(), control.c_str());
     if (Status st = camera.start(); !st) return st;
     s.watchdog_ = std::make_unique<LedWatchdog>(*s.devices_.light, std::chrono::milliseconds(board.light.maxOnMs));
 

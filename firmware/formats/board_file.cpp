@@ -22,7 +22,7 @@ public:
         const cv::FileNode n = node_[key];
         if (missing(n, key, required)) return;
         if (!n.isString()) return fail(key, "must be a string");
-        out = n.string();
+        out = stripYamlComment(n.string());
     }
     void choice(const char* key, std::string& out, std::initializer_list<const char*> allowed, bool required = false)
     {
@@ -64,7 +64,7 @@ public:
             return;
         }
         if (n.isString()) {
-            const std::string s = n.string();
+            const std::string s = stripYamlComment(n.string());
             if (s == "true" || s == "yes" || s == "on") return void(out = true);
             if (s == "false" || s == "no" || s == "off") return void(out = false);
         }

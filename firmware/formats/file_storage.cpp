@@ -35,6 +35,19 @@ Status openFileStorage(cv::FileStorage& fs, const std::string& text, const std::
     return Status::ok();
 }
 
+std::string stripYamlComment(const std::string& value)
+{
+    std::size_t end = value.size();
+    for (std::size_t i = 0; i < value.size(); ++i) {
+        if (value[i] == '#' && (i == 0 || value[i - 1] == ' ' || value[i - 1] == '\t')) {
+            end = i;
+            break;
+        }
+    }
+    while (end > 0 && (value[end - 1] == ' ' || value[end - 1] == '\t')) --end;
+    return value.substr(0, end);
+}
+
 Result<int> readInt(const cv::FileNode& root, const char* key)
 {
     const cv::FileNode n = root[key];
@@ -51,7 +64,7 @@ Result<std::string> readString(const cv::FileNode& root, const char* key)
     const cv::FileNode n = root[key];
     if (n.empty() || n.isNone()) return Status::error(std::string("missing key '") + key + "'");
     if (!n.isString()) return Status::error(std::string("key '") + key + "' must be a string");
-    return n.string();
+    return stripYamlComment(n.string());
 }
 
 Result<std::vector<double>> readMatrix(const cv::FileNode& root, const char* key, int rows, int cols)

@@ -33,7 +33,7 @@ public:
     std::uint32_t pixelFormat() const { return pixelFormat_; }  // V4L2 fourcc picked by open()
     // Controls the camera lacks (e.g. "gain"), filled by configure(): the
     // frame is then taken with the camera's own setting for them.
-    const std::vector<std::string>& missingControls() const { return missingControls_; }
+    std::vector<std::string> missingControls() const override { return missingControls_; }
 
 private:
     struct Buffer {

@@ -45,3 +45,11 @@ TEST(PatternFile, ErrorsNameFileKeyAndConstraint)
     ASSERT_FALSE(window);
     EXPECT_NE(window.message().find("repeats at edge 3"), std::string::npos) << window.message();
 }
+
+// OpenCV's YAML reader keeps "# ..." in an unquoted string; stria drops it as YAML would.
+TEST(PatternFile, TrailingCommentIsNotPartOfTheColours)
+{
+    auto p = parsePattern("stripe_width: 8  # projector px\ncolors: CGMRGWBG   # the manufactured slide\n", "slide.yaml");
+    ASSERT_TRUE(p) << p.message();
+    EXPECT_EQ(p->colorLetters(), "CGMRGWBG");
+}
