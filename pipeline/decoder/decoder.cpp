@@ -95,7 +95,7 @@ Result<std::unique_ptr<Decoder>> Decoder::create(const StripePattern& pattern, c
         return Status::error("the crosstalk matrix is singular (determinant " +
                              std::to_string(cv::determinant(mixing)) + "): it cannot be corrected");
 
-    auto ws = std::make_unique<DecoderWorkspace>(pattern, rig, params);
+    auto ws = std::make_unique<DecoderWorkspace>(pattern, params);
     const int w = cam.width, h = cam.height;
     const std::size_t n = static_cast<std::size_t>(w) * h;
     ws->width = w;

@@ -65,13 +65,9 @@ struct OpenEntry {
 };
 
 struct DecoderWorkspace {
-    DecoderWorkspace(const StripePattern& pattern, const RigModel& rig, const DecoderParams& params)
-        : pattern(pattern), rig(rig), params(params)
-    {
-    }
+    DecoderWorkspace(const StripePattern& pattern, const DecoderParams& params) : pattern(pattern), params(params) {}
 
     StripePattern pattern;
-    RigModel rig;
     DecoderParams params;
     int width = 0, height = 0;
     cv::Matx33f colorCorrection;  // inverse of params.crosstalk (R G B)
