@@ -1,0 +1,32 @@
+#!/bin/sh
+# Cross-builds stria for arm64 and runs the test suite under qemu-aarch64,
+# then checks that x86-64 and arm64 decode the same point clouds.
+#   cross/test-arm64.sh [PRESET]    PRESET: arm64 (default), arm64-a53/a72/a76
+# Uses the presets' build directories (build/PRESET, build/host). Exit status:
+# ctest's, or 1 if stria does not start under qemu or the clouds differ.
+set -eu
+cd "$(dirname "$0")/.."
+preset=${1:-arm64}
+jobs=${CTEST_PARALLEL_LEVEL:-$(nproc)}
+
+cmake --preset "$preset"
+cmake --build --preset "$preset"
+
+# Start-up check first: a binary that hangs in qemu would otherwise cost
+# every test its whole timeout. SIGKILL because a hung qemu ignores SIGTERM.
+if ! timeout -s KILL 60 qemu-aarch64 "build/$preset/firmware/stria" --version; then
+	echo "$0: build/$preset/firmware/stria does not start under qemu-aarch64 (see docs/cross.md)" >&2
+	exit 1
+fi
+
+status=0
+ctest --preset "$preset" --parallel "$jobs" || status=$?
+
+# The host build for the comparison: reuse CI's, or build just the program.
+if [ ! -x build/host/firmware/stria ]; then
+	cmake --preset host >/dev/null
+fi
+cmake --build --preset host --target stria
+cross/compare-arm64.sh build/host/firmware/stria "build/$preset/firmware/stria" ||
+	{ [ $status -ne 0 ] || status=1; }
+exit $status
