@@ -32,8 +32,10 @@ Status DpParams::validate() const
     if (!(alpha >= 0 && beta > alpha && beta <= 1))
         return Status::error("DP ramp needs 0 <= alpha < beta <= 1, got alpha " + std::to_string(alpha) + ", beta " +
                              std::to_string(beta));
-    if (!(edgeFloor > 0 && edgeFloor < 1)) return Status::error("DP edge floor must be in (0, 1), got " + std::to_string(edgeFloor));
-    if (sideOffset < 1 || sideOffset > 16) return Status::error("DP side offset must be 1..16 px, got " + std::to_string(sideOffset));
+    if (!(edgeFloor > 0 && edgeFloor < 1))
+        return Status::error("DP edge floor must be in (0, 1), got " + std::to_string(edgeFloor));
+    if (sideOffset < 1 || sideOffset > 16)
+        return Status::error("DP side offset must be 1..16 px, got " + std::to_string(sideOffset));
     if (passes < 1 || passes > 16) return Status::error("DP passes must be 1..16, got " + std::to_string(passes));
     return Status::ok();
 }

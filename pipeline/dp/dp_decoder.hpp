@@ -45,8 +45,9 @@ struct DpParams {
     // Zhang et al.'s ramp, on intensities in [0, 1].
     double alpha = 0.007;
     double beta = 0.03;
-    // A gradient maximum is a candidate transition when its largest channel
-    // change reaches this (below beta no channel can score a full rise).
+    // A local maximum of the gradient magnitude (L2 over the channels of
+    // I(x+1) - I(x-1)) is a candidate transition when it reaches this: a
+    // "small floor" at beta, where a channel's rise first scores fully.
     double edgeFloor = 0.03;
     // The colour change is taken between the pixels this far left and right of
     // the edge, outside the blur of the edge itself.
@@ -57,8 +58,7 @@ struct DpParams {
     Status validate() const;
 };
 
-// One matched transition of one row, before triangulation (for tests and
-// for the evaluation's diagnostics).
+// One matched transition of one row, before triangulation (decodeRow).
 struct DpMatch {
     float x = 0;      // sub-pixel camera column of the edge
     int edge = 0;     // pattern edge index
