@@ -15,7 +15,8 @@
 //     stripe keeps the one with the lower position error Q (eq. 10).
 // Afterwards three checks drop false positives: regions whose edges across the
 // stripes mostly contradict their stripe, regions without window() confirmed
-// stripe edges around them (the window property, locally), and components
+// stripe edges around them (the window property, locally; a black stripe,
+// which a shadow imitates, needs one on each side), and components
 // (regions decoded by one pass) with fewer than minComponentRegions regions.
 #include "pipeline/decoder/workspace.hpp"
 
@@ -331,6 +332,11 @@ private:
     // it: run to the left + run to the right >= window(). Narrow patches
     // reached across a depth step by one chance match (the wall between the
     // slats of a fan) cannot show that much evidence.
+    // A black stripe (all channels off) looks like a shadow: it is only
+    // evidenced by light on both sides, so it also needs a confirmed stripe
+    // edge on each side (a slat's shadow on the wall next to a lit stripe
+    // otherwise decodes as the pattern's next black stripe and spreads
+    // through the shadow over null edges).
     void rejectShortRuns()
     {
         const StripePattern& pattern = ws_.pattern;
@@ -373,8 +379,12 @@ private:
             }
             if (!changed) break;
         }
-        for (int v = 0; v < ws_.regionCount; ++v)
-            if (ws_.regions[v].stripe >= 0 && left(v) + right(v) < window) ws_.regions[v].stripe = -1;
+        for (int v = 0; v < ws_.regionCount; ++v) {
+            const int stripe = ws_.regions[v].stripe;
+            if (stripe < 0) continue;
+            const bool unbounded = pattern.color(stripe) == 0 && (left(v) == 0 || right(v) == 0);
+            if (left(v) + right(v) < window || unbounded) ws_.regions[v].stripe = -1;
+        }
     }
 
     static float maxChannelRange(const Region& r) { return std::max({r.range[0], r.range[1], r.range[2]}); }

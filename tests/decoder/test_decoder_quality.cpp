@@ -72,12 +72,12 @@ TEST(DecoderQuality, LowContrastWithAmbientLight)
     s.contrast = 0.3;
     s.ambient = 0.2;
     const SceneRun run = decodeScene(hal::sim::desktopRig(), SceneKind::TexturedRelief, Albedo::Photo, s);
-    // TARGET NOT REACHED: the issue asks >= 75% inliers; measured 34.5% (the
+    // TARGET NOT REACHED: the issue asks >= 75% inliers; measured 32.7% (the
     // photo texture's edges outweigh the 0.3-contrast stripes in the
-    // watershed; with uniform albedo the same settings give 94%). This guards
-    // the measured level and the outlier rate, which does meet the bar.
+    // watershed; with uniform albedo the same settings give 93%). This guards
+    // the measured level and the outlier rate (measured 0.02%).
     EXPECT_GE(run.score.inlierRatio(), 0.30);
-    EXPECT_LE(run.score.outlierRatio(), 0.005);
+    EXPECT_LE(run.score.outlierRatio(), 0.001);
 }
 
 TEST(DecoderQuality, LowContrastWithAmbientLightUniformAlbedo)
@@ -101,10 +101,11 @@ TEST(DecoderQuality, TiltedWhitePlaneIsPrecise)
 TEST(DecoderQuality, FanWithGapsHasFewOutliers)
 {
     const SceneRun run = decodeScene(hal::sim::desktopRig(), SceneKind::Fan, Albedo::Uniform, noise(2));
-    // TARGET NOT REACHED: the issue asks <= 0.2% outliers; measured 1.07%
-    // (narrow strips of the wall between slats, decoded across the depth step).
+    // TARGET NOT REACHED: the issue asks <= 0.2% outliers; measured 0.78%
+    // (strips of the wall between slats whose colours repeat the pattern next
+    // to the slat's last stripe, decoded across the depth step).
     // This guards the measured level.
-    EXPECT_LE(run.score.outlierRatio(), 0.015);
+    EXPECT_LE(run.score.outlierRatio(), 0.009);
     EXPECT_GE(run.score.inlierRatio(), 0.70);
 }
 
