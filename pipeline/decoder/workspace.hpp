@@ -82,7 +82,7 @@ struct DecoderWorkspace {
     std::unique_ptr<std::byte[]> orderAndPoints;
     std::int32_t* pixelOrder = nullptr;
     ScanPoint* points = nullptr;
-    std::unique_ptr<std::int32_t[]> scratch;  // watershed FIFO links, then median selection bytes
+    std::unique_ptr<std::int32_t[]> scratch;  // gradient row lanes, watershed queue blocks, median bytes
 
     // Graph.
     int maxRegions = 0, maxEdges = 0, maxPoints = 0;
@@ -111,6 +111,10 @@ struct DecoderWorkspace {
     std::size_t allocatedBytes = 0;  // by create(): Decoder::workspaceBytes()
     cv::Vec3d rayThroughPixel(double u, double v) const;
 };
+
+// Watershed queue: entries per block, and the scratch entries it needs.
+constexpr int kQueueBlock = 16;  // one cache line
+std::size_t queueScratchEntries(std::size_t pixels);
 
 // The stages, in order.
 void computeGradient(DecoderWorkspace& ws);

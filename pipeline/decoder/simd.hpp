@@ -1,0 +1,21 @@
+#pragma once
+// The decoder's pixel kernels with a plain scalar reference each. The fast
+// versions (NEON intrinsics on ARM, auto-vectorised lanes elsewhere) must give
+// exactly the reference's output: tests/decoder/test_kernels.cpp checks them
+// on random and simulator frames.
+
+#include <cstdint>
+
+namespace stria::pipeline {
+
+// One row of the gradient stage (gradient.cpp) from the rows above, at and
+// below it (clamped at the image border by the caller): per pixel,
+// magnitude = (max over channels of Sobel |dx|/4 + |dy|/4, + 1) / 2 and
+// along = max over channels of |dy|/4 (alongY) or |dx|/4.
+void gradientRowReference(const std::uint8_t* up, const std::uint8_t* row, const std::uint8_t* down, int width,
+                          bool alongY, std::uint8_t* magnitude, std::uint8_t* along);
+// Same output. lanes: 12 x width int16 of scratch (unused with NEON).
+void gradientRow(const std::uint8_t* up, const std::uint8_t* row, const std::uint8_t* down, int width, bool alongY,
+                 std::uint8_t* magnitude, std::uint8_t* along, std::int16_t* lanes);
+
+}  // namespace stria::pipeline

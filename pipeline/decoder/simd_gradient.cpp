@@ -1,0 +1,122 @@
+// Gradient row kernels (pipeline/decoder/simd.hpp).
+#include "pipeline/decoder/simd.hpp"
+
+#include <algorithm>
+#include <cstdlib>
+
+#if defined(__ARM_NEON)
+#include <arm_neon.h>
+#endif
+
+namespace stria::pipeline {
+namespace {
+
+// Pixel x with its neighbours' columns clamped to the row.
+inline void gradientPixel(const std::uint8_t* up, const std::uint8_t* row, const std::uint8_t* down, int width,
+                          bool alongY, int x, std::uint8_t* magnitude, std::uint8_t* along)
+{
+    const int left = 3 * std::max(x - 1, 0), right = 3 * std::min(x + 1, width - 1), here = 3 * x;
+    int best = 0, bestAlong = 0;
+    for (int c = 0; c < 3; ++c) {
+        // Sobel: central differences smoothed 1-2-1 across, /4.
+        const int gx = std::abs(up[right + c] - up[left + c] + 2 * (row[right + c] - row[left + c]) +
+                                down[right + c] - down[left + c]) / 4;
+        const int gy = std::abs(down[left + c] - up[left + c] + 2 * (down[here + c] - up[here + c]) +
+                                down[right + c] - up[right + c]) / 4;
+        best = std::max(best, gx + gy);
+        bestAlong = std::max(bestAlong, alongY ? gy : gx);
+    }
+    // best <= 510 and bestAlong <= 255: both fit a byte as stored.
+    magnitude[x] = static_cast<std::uint8_t>((best + 1) / 2);
+    along[x] = static_cast<std::uint8_t>(bestAlong);
+}
+
+#if defined(__ARM_NEON)
+// 16 pixels from x: the three channels de-interleaved by vld3.
+inline void gradient16(const std::uint8_t* up, const std::uint8_t* row, const std::uint8_t* down, bool alongY, int x,
+                       std::uint8_t* magnitude, std::uint8_t* along)
+{
+    const uint8x16x3_t ul = vld3q_u8(up + 3 * (x - 1)), uh = vld3q_u8(up + 3 * x), ur = vld3q_u8(up + 3 * (x + 1));
+    const uint8x16x3_t rl = vld3q_u8(row + 3 * (x - 1)), rr = vld3q_u8(row + 3 * (x + 1));
+    const uint8x16x3_t dl = vld3q_u8(down + 3 * (x - 1)), dh = vld3q_u8(down + 3 * x),
+                       dr = vld3q_u8(down + 3 * (x + 1));
+    uint16x8_t best[2] = {vdupq_n_u16(0), vdupq_n_u16(0)}, bestAlong[2] = {vdupq_n_u16(0), vdupq_n_u16(0)};
+    for (int c = 0; c < 3; ++c) {
+        // Differences of bytes as int16 (vsubl wraps into the right value).
+        const int16x8_t hx[2] = {
+            vaddq_s16(vaddq_s16(vreinterpretq_s16_u16(vsubl_u8(vget_low_u8(ur.val[c]), vget_low_u8(ul.val[c]))),
+                                vreinterpretq_s16_u16(vsubl_u8(vget_low_u8(dr.val[c]), vget_low_u8(dl.val[c])))),
+                      vshlq_n_s16(vreinterpretq_s16_u16(vsubl_u8(vget_low_u8(rr.val[c]), vget_low_u8(rl.val[c]))), 1)),
+            vaddq_s16(vaddq_s16(vreinterpretq_s16_u16(vsubl_high_u8(ur.val[c], ul.val[c])),
+                                vreinterpretq_s16_u16(vsubl_high_u8(dr.val[c], dl.val[c]))),
+                      vshlq_n_s16(vreinterpretq_s16_u16(vsubl_high_u8(rr.val[c], rl.val[c])), 1))};
+        const int16x8_t vy[2] = {
+            vaddq_s16(vaddq_s16(vreinterpretq_s16_u16(vsubl_u8(vget_low_u8(dl.val[c]), vget_low_u8(ul.val[c]))),
+                                vreinterpretq_s16_u16(vsubl_u8(vget_low_u8(dr.val[c]), vget_low_u8(ur.val[c])))),
+                      vshlq_n_s16(vreinterpretq_s16_u16(vsubl_u8(vget_low_u8(dh.val[c]), vget_low_u8(uh.val[c]))), 1)),
+            vaddq_s16(vaddq_s16(vreinterpretq_s16_u16(vsubl_high_u8(dl.val[c], ul.val[c])),
+                                vreinterpretq_s16_u16(vsubl_high_u8(dr.val[c], ur.val[c]))),
+                      vshlq_n_s16(vreinterpretq_s16_u16(vsubl_high_u8(dh.val[c], uh.val[c])), 1))};
+        for (int half = 0; half < 2; ++half) {
+            const uint16x8_t gx = vshrq_n_u16(vreinterpretq_u16_s16(vabsq_s16(hx[half])), 2);
+            const uint16x8_t gy = vshrq_n_u16(vreinterpretq_u16_s16(vabsq_s16(vy[half])), 2);
+            best[half] = vmaxq_u16(best[half], vaddq_u16(gx, gy));
+            bestAlong[half] = vmaxq_u16(bestAlong[half], alongY ? gy : gx);
+        }
+    }
+    const uint16x8_t one = vdupq_n_u16(1);
+    vst1q_u8(magnitude + x, vcombine_u8(vmovn_u16(vshrq_n_u16(vaddq_u16(best[0], one), 1)),
+                                        vmovn_u16(vshrq_n_u16(vaddq_u16(best[1], one), 1))));
+    vst1q_u8(along + x, vcombine_u8(vmovn_u16(bestAlong[0]), vmovn_u16(bestAlong[1])));
+}
+#endif
+
+}  // namespace
+
+void gradientRowReference(const std::uint8_t* up, const std::uint8_t* row, const std::uint8_t* down, int width,
+                          bool alongY, std::uint8_t* magnitude, std::uint8_t* along)
+{
+    for (int x = 0; x < width; ++x) gradientPixel(up, row, down, width, alongY, x, magnitude, along);
+}
+
+void gradientRow(const std::uint8_t* up, const std::uint8_t* row, const std::uint8_t* down, int width, bool alongY,
+                 std::uint8_t* magnitude, std::uint8_t* along, [[maybe_unused]] std::int16_t* lanes)
+{
+    if (width < 3) {
+        gradientRowReference(up, row, down, width, alongY, magnitude, along);
+        return;
+    }
+    gradientPixel(up, row, down, width, alongY, 0, magnitude, along);
+    int x = 1;
+#if defined(__ARM_NEON)
+    for (; x + 16 < width; x += 16) gradient16(up, row, down, alongY, x, magnitude, along);
+#else
+    // Per byte lane i (pixel i / 3, channel i % 3) of the interior pixels:
+    // separable Sobel in int16 loops the compiler vectorises, then the
+    // maximum over each pixel's three lanes.
+    const int bytes = 3 * width;
+    std::int16_t* smooth = lanes;            // up + 2 row + down
+    std::int16_t* vertical = lanes + bytes;  // down - up
+    std::int16_t* gx = lanes + 2 * bytes;
+    std::int16_t* gy = lanes + 3 * bytes;
+    for (int i = 0; i < bytes; ++i) {
+        smooth[i] = static_cast<std::int16_t>(up[i] + 2 * row[i] + down[i]);
+        vertical[i] = static_cast<std::int16_t>(down[i] - up[i]);
+    }
+    for (int i = 3; i < bytes - 3; ++i) {
+        const int dx = smooth[i + 3] - smooth[i - 3], dy = vertical[i - 3] + 2 * vertical[i] + vertical[i + 3];
+        gx[i] = static_cast<std::int16_t>((dx < 0 ? -dx : dx) >> 2);
+        gy[i] = static_cast<std::int16_t>((dy < 0 ? -dy : dy) >> 2);
+    }
+    const std::int16_t* alongLanes = alongY ? gy : gx;
+    for (; x + 1 < width; ++x) {
+        const int i = 3 * x;
+        const int best = std::max({gx[i] + gy[i], gx[i + 1] + gy[i + 1], gx[i + 2] + gy[i + 2]});
+        magnitude[x] = static_cast<std::uint8_t>((best + 1) >> 1);
+        along[x] = static_cast<std::uint8_t>(std::max({alongLanes[i], alongLanes[i + 1], alongLanes[i + 2]}));
+    }
+#endif
+    for (; x < width; ++x) gradientPixel(up, row, down, width, alongY, x, magnitude, along);
+}
+
+}  // namespace stria::pipeline
