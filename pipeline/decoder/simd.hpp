@@ -4,6 +4,9 @@
 // exactly the reference's output: tests/decoder/test_kernels.cpp checks them
 // on random and simulator frames.
 
+#include <opencv2/core.hpp>
+
+#include <array>
 #include <cstdint>
 
 namespace stria::pipeline {
@@ -17,5 +20,14 @@ void gradientRowReference(const std::uint8_t* up, const std::uint8_t* row, const
 // Same output. lanes: 12 x width int16 of scratch (unused with NEON).
 void gradientRow(const std::uint8_t* up, const std::uint8_t* row, const std::uint8_t* down, int width, bool alongY,
                  std::uint8_t* magnitude, std::uint8_t* along, std::int16_t* lanes);
+
+// Edge location (depth.cpp): for the count samples i = first, first + 1, ...
+// of a row, the colour change from pixel i to i + 1 (R G B at rgbOffset),
+// crosstalk-corrected by m and projected on weight: weight . (m * change),
+// summed in that order (so the NEON lanes give the same floats).
+void projectedGradientsReference(const std::uint8_t* row, int first, int count, const std::array<int, 3>& rgbOffset,
+                                 const cv::Matx33f& m, const cv::Vec3f& weight, float* out);
+void projectedGradients(const std::uint8_t* row, int first, int count, const std::array<int, 3>& rgbOffset,
+                        const cv::Matx33f& m, const cv::Vec3f& weight, float* out);
 
 }  // namespace stria::pipeline

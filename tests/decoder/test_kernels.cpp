@@ -74,6 +74,37 @@ TEST(DecoderKernels, GradientRowMatchesReferenceOnSimulatorFrames)
     }
 }
 
+// Samples whose fast projected gradient is not bit-equal to the reference.
+int projectedGradientsDiffering(const cv::Mat& frame, const cv::Matx33f& m, std::mt19937& rng)
+{
+    std::uniform_real_distribution<float> unit(-1, 1);
+    int differing = 0;
+    for (const std::array<int, 3> rgbOffset : {std::array<int, 3>{2, 1, 0}, std::array<int, 3>{0, 1, 2}})
+        for (int y = 0; y < frame.rows; ++y)
+            for (int count = 1; count <= 21; ++count) {
+                const int first = static_cast<int>(rng() % static_cast<unsigned>(frame.cols - count));
+                const cv::Vec3f weight(unit(rng), unit(rng), unit(rng));
+                std::array<float, 21> fast, reference;
+                projectedGradients(frame.ptr(y), first, count, rgbOffset, m, weight, fast.data());
+                projectedGradientsReference(frame.ptr(y), first, count, rgbOffset, m, weight, reference.data());
+                for (int k = 0; k < count; ++k) differing += fast[k] != reference[k];
+            }
+    return differing;
+}
+
+TEST(DecoderKernels, EdgeLocationGradientsEqualReferenceBitForBit)
+{
+    std::mt19937 rng(5);
+    // The simulator's crosstalk inverted, and the identity.
+    const cv::Matx33f crosstalk(0.9f, 0.08f, 0.02f, 0.1f, 0.8f, 0.1f, 0.03f, 0.12f, 0.85f);
+    const cv::Mat noise = randomFrame(200, 40, 9);
+    EXPECT_EQ(projectedGradientsDiffering(noise, crosstalk.inv(), rng), 0);
+    EXPECT_EQ(projectedGradientsDiffering(noise, cv::Matx33f::eye(), rng), 0);
+    const cv::Mat relief = renderFrame(hal::sim::SceneKind::TexturedRelief, hal::sim::Albedo::Photo, 4);
+    ASSERT_FALSE(relief.empty());
+    EXPECT_EQ(projectedGradientsDiffering(relief, crosstalk.inv(), rng), 0);
+}
+
 // The watershed as first written: one FIFO per level linked through the
 // pixels, integer division for the coordinates.
 int referenceWatershed(const std::uint8_t* g, int w, int h, int maxRegions, std::vector<std::int32_t>& label)

@@ -1,0 +1,52 @@
+// Edge location kernels (pipeline/decoder/simd.hpp).
+#include "pipeline/decoder/simd.hpp"
+
+#if defined(__ARM_NEON)
+#include <arm_neon.h>
+#endif
+
+namespace stria::pipeline {
+
+void projectedGradientsReference(const std::uint8_t* row, int first, int count, const std::array<int, 3>& rgbOffset,
+                                 const cv::Matx33f& m, const cv::Vec3f& weight, float* out)
+{
+    for (int k = 0; k < count; ++k) {
+        const std::uint8_t* p = row + 3 * (first + k);
+        const cv::Vec3f raw(static_cast<float>(p[3 + rgbOffset[0]] - p[rgbOffset[0]]),
+                            static_cast<float>(p[3 + rgbOffset[1]] - p[rgbOffset[1]]),
+                            static_cast<float>(p[3 + rgbOffset[2]] - p[rgbOffset[2]]));
+        out[k] = weight.dot(m * raw);
+    }
+}
+
+void projectedGradients(const std::uint8_t* row, int first, int count, const std::array<int, 3>& rgbOffset,
+                        const cv::Matx33f& m, const cv::Vec3f& weight, float* out)
+{
+    int k = 0;
+#if defined(__ARM_NEON)
+    // 8 samples per step: pixels i..i+7 and i+1..i+8 de-interleaved. Products
+    // and sums one by one from 0 as cv::Matx computes them (no fused
+    // multiply-add), so every lane equals the reference bit for bit.
+    for (; k + 8 <= count; k += 8) {
+        const int i = first + k;
+        const uint8x8x3_t here = vld3_u8(row + 3 * i), next = vld3_u8(row + 3 * (i + 1));
+        for (int half = 0; half < 2; ++half) {
+            float32x4_t raw[3];
+            for (int c = 0; c < 3; ++c) {
+                const int16x8_t d = vreinterpretq_s16_u16(vsubl_u8(next.val[rgbOffset[c]], here.val[rgbOffset[c]]));
+                raw[c] = vcvtq_f32_s32(vmovl_s16(half == 0 ? vget_low_s16(d) : vget_high_s16(d)));
+            }
+            float32x4_t sum = vdupq_n_f32(0);
+            for (int r = 0; r < 3; ++r) {
+                float32x4_t corrected = vdupq_n_f32(0);
+                for (int c = 0; c < 3; ++c) corrected = vaddq_f32(corrected, vmulq_n_f32(raw[c], m(r, c)));
+                sum = vaddq_f32(sum, vmulq_n_f32(corrected, weight[r]));
+            }
+            vst1q_f32(out + k + 4 * half, sum);
+        }
+    }
+#endif
+    projectedGradientsReference(row, first + k, count - k, rgbOffset, m, weight, out + k);
+}
+
+}  // namespace stria::pipeline
