@@ -1,5 +1,7 @@
 #include "firmware/app/stream.hpp"
 
+#include "hal/clock.hpp"
+
 #include <algorithm>
 #include <cstring>
 #include <string>
@@ -88,6 +90,9 @@ void Streamer::captureLoop()
             break;
         }
         watchdog_->arm();
+        // Started exposing before the LED was on (a queued buffer, a
+        // free-running sensor): unlit, not worth a slot.
+        if (frame->timestampNs < ledOnNs_) continue;
         const FrameView& view = frame->view;
         if (view.width != width || view.height != height || view.format != PixelFormat::Bgr8) {
             error = Status::error(std::string("camera '") + camera_.backendName() + "' delivered a " +
@@ -200,6 +205,7 @@ StreamSummary Streamer::run()
             summary.error = s.withContext("light: ");
             return summary;
         }
+        ledOnNs_ = hal::monotonicNs();
         watchdog_->arm();
     }
     // A stop that came before or while the LED was switched on.

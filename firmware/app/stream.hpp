@@ -10,7 +10,8 @@
 // overwrites the OLDEST queued frame: a live view wants the newest picture,
 // and latency stays bounded by the ring. Each overwritten frame counts as
 // dropped, so captured = decoded + dropped once run() has returned. Sensor
-// frames the capture thread never collected (sequence gaps) count as missed.
+// frames the capture thread never collected (sequence gaps) count as missed;
+// frames that started exposing before the LED was on are skipped uncounted.
 //
 // The LED goes off as soon as capturing ends (before the frames left in the
 // ring are decoded), on every way out of run(), on requestStop() (a signal)
@@ -113,6 +114,7 @@ private:
     Status error_;
     StreamStats stats_;
     std::atomic<bool> stop_{false};
+    std::int64_t ledOnNs_ = 0;  // monotonic; frames exposed before it are skipped
 
     // Timings of the last kTimingWindow successful decodes (decode thread only).
     std::array<pipeline::StageTimings, kTimingWindow> timings_{};

@@ -269,21 +269,23 @@ TEST_F(StreamTest, SigtermStopsTheStreamCleanlyWithTheLedOff)
 
 TEST_F(StreamTest, ACameraTimeoutEndsTheStreamWithItsMessageAndTheLedOff)
 {
-    // Frame 0 comes at once, frame 1 only after 5 s: the 100 ms wait times out.
+    // Frame 0 was exposed before the LED came on (skipped), frame 1 comes
+    // only after 5 s: the 100 ms wait times out.
     auto cam = camera(5000 * kMs);
     options_.captureTimeout = 100ms;
     auto streamer = Streamer::create(*cam, light_, *decoder_, config_, options_);
     ASSERT_TRUE(streamer) << streamer.message();
     const StreamSummary summary = (*streamer)->run();
     EXPECT_EQ(summary.error.message(), "camera 'replay': no frame within 100 ms");
-    EXPECT_EQ(summary.stats.captured, 1u);
-    EXPECT_EQ(summary.stats.decoded, 1u);
+    EXPECT_EQ(summary.stats.captured, 0u);
+    EXPECT_EQ(summary.stats.decoded, 0u);
     EXPECT_FALSE(light_.isOn());
 }
 
 TEST_F(StreamTest, TheWatchdogSwitchesTheLedOffWhenFramesStopComing)
 {
-    // Frames every 300 ms but the LED may go 50 ms without one.
+    // Frames every 300 ms but the LED may go 50 ms without one. Frame 0 was
+    // exposed before the LED came on and is skipped; frame 1 comes too late.
     auto cam = camera(300 * kMs);
     options_.ledMaxGap = 50ms;
     auto streamer = Streamer::create(*cam, light_, *decoder_, config_, options_);
@@ -291,9 +293,9 @@ TEST_F(StreamTest, TheWatchdogSwitchesTheLedOffWhenFramesStopComing)
     const std::int64_t startNs = hal::monotonicNs();
     const StreamSummary summary = (*streamer)->run();
     EXPECT_EQ(summary.error.message(), "the LED was forced off after 50 ms without a frame");
-    EXPECT_EQ(summary.stats.captured, 1u);
+    EXPECT_EQ(summary.stats.captured, 0u);
     EXPECT_FALSE(light_.isOn());
-    // The watchdog's own switch-off came ~50 ms after the first frame, long before the second.
+    // The watchdog's own switch-off came ~50 ms after the LED went on, long before frame 1.
     const auto changes = ledChangesSince(startNs);
     ASSERT_GE(changes.size(), 2u);
     EXPECT_TRUE(changes[0].on);
