@@ -72,11 +72,12 @@ TEST(DecoderQuality, LowContrastWithAmbientLight)
     s.contrast = 0.3;
     s.ambient = 0.2;
     const SceneRun run = decodeScene(hal::sim::desktopRig(), SceneKind::TexturedRelief, Albedo::Photo, s);
-    // TARGET NOT REACHED: the issue asks >= 75% inliers; measured 32.7% (the
-    // photo texture's edges outweigh the 0.3-contrast stripes in the
-    // watershed; with uniform albedo the same settings give 93%). This guards
-    // the measured level and the outlier rate (measured 0.02%).
-    EXPECT_GE(run.score.inlierRatio(), 0.30);
+    // TARGET NOT REACHED: the issue asks >= 75% inliers; measured 42.1%
+    // (84% of the ideal stripe edges are borders between superpixels of the
+    // right stripes, but the texture's edges break the traversal; with uniform
+    // albedo the same settings give 97%). This guards the measured level and
+    // the outlier rate (measured 0.04%).
+    EXPECT_GE(run.score.inlierRatio(), 0.40);
     EXPECT_LE(run.score.outlierRatio(), 0.001);
 }
 
@@ -101,7 +102,7 @@ TEST(DecoderQuality, TiltedWhitePlaneIsPrecise)
 TEST(DecoderQuality, FanWithGapsHasFewOutliers)
 {
     const SceneRun run = decodeScene(hal::sim::desktopRig(), SceneKind::Fan, Albedo::Uniform, noise(2));
-    // TARGET NOT REACHED: the issue asks <= 0.2% outliers; measured 0.78%
+    // TARGET NOT REACHED: the issue asks <= 0.2% outliers; measured 0.74%
     // (strips of the wall between slats whose colours repeat the pattern next
     // to the slat's last stripe, decoded across the depth step).
     // This guards the measured level.
