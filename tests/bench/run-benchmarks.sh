@@ -36,6 +36,7 @@ export STRIA_BENCH_CPU="$(lscpu | sed -n 's/^Model name: *//p' | head -n1)"
 export STRIA_BENCH_CORES="$(nproc) cores available ($(lscpu | sed -n 's/^CPU(s): *//p') CPUs, $(lscpu | sed -n 's/^Thread(s) per core: *//p') threads per core)"
 export STRIA_BENCH_LOAD="$load"
 export STRIA_BENCH_REPETITIONS="$repetitions"
+export STRIA_BENCH_SOURCE="$(git describe --always --dirty 2>/dev/null || echo unknown)"
 python3 - "$json" docs/performance.md <<'EOF'
 import datetime, json, os, sys
 
@@ -57,10 +58,14 @@ def ms(r, key="cpu_time"):
     return r[key] * scale
 
 TARGETS = {"780x580": 5.0, "1388x1038": 15.0}
+source = os.environ["STRIA_BENCH_SOURCE"]
+if source.endswith("-dirty"):
+    source += " (the work tree had uncommitted changes)"
 out = []
 out.append(f"Measured {datetime.datetime.now(datetime.timezone.utc):%Y-%m-%d %H:%M} UTC on {os.environ['STRIA_BENCH_CPU']}, "
            f"{os.environ['STRIA_BENCH_CORES']}; load average before the run {os.environ['STRIA_BENCH_LOAD']}; "
-           f"{os.environ['STRIA_BENCH_COMPILER']}, Release. Medians of {os.environ['STRIA_BENCH_REPETITIONS']} "
+           f"{os.environ['STRIA_BENCH_COMPILER']}, Release; source git {source}. "
+           f"Medians of {os.environ['STRIA_BENCH_REPETITIONS']} "
            "repetitions. Decode, Sobel and DP times are CPU time of the one thread that runs them (wall time "
            "in brackets: it includes time the scheduler gave to other processes).")
 out.append("")
