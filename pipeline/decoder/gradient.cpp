@@ -26,13 +26,17 @@ void computeGradient(DecoderWorkspace& ws)
     // gradient in the order buffer, the kernel's int16 lanes in the scratch.
     auto* alongRow = reinterpret_cast<std::uint8_t*>(ws.orderAndPoints.get());
     auto* lanes = reinterpret_cast<std::int16_t*>(ws.scratch.get());
-    std::array<int, 256> along{};
+    // Along-gradient histogram in four interleaved copies (neighbouring
+    // pixels mostly share a value: one counter would serialise the increments).
+    std::array<std::array<int, 256>, 4> alongCounts{};
     for (int y = 0; y < h; ++y) {
         std::uint8_t* out = ws.gradient.get() + static_cast<std::ptrdiff_t>(y) * w;
         gradientRow(ws.frame.row(std::max(y - 1, 0)), ws.frame.row(y), ws.frame.row(std::min(y + 1, h - 1)), w, alongY,
                     out, alongRow, lanes);
-        for (int x = 0; x < w; ++x) ++along[alongRow[x]];
+        for (int x = 0; x < w; ++x) ++alongCounts[x & 3][alongRow[x]];
     }
+    std::array<int, 256> along;
+    for (int l = 0; l < 256; ++l) along[l] = alongCounts[0][l] + alongCounts[1][l] + alongCounts[2][l] + alongCounts[3][l];
 
     const int n = w * h;
     int median = 0;
