@@ -184,10 +184,14 @@ TEST(Scanner, LedIsOnExactlyAroundTheCapture)
         EXPECT_LE(r.exposureStartNs + exposureNs, off.timeNs);           // lit until the exposure ended
         EXPECT_LE(off.timeNs, r.ledOffNs);
         EXPECT_LE(r.ledOffNs, r.decodeStartNs);                           // off before decoding
-        // On no longer than settle + one frame interval + exposure + 15 ms
-        // slack for a loaded CI machine (or qemu).
+        // On no longer than settle + one frame interval + exposure, plus
+        // 100 ms of scheduling slack for a loaded CI machine or qemu (measured
+        // 40 ms late under a load of 10 on 2 cores). The ordering above is the
+        // exact guarantee; this bound only shows the LED is not left on until
+        // the watchdog (max_on_ms) would step in.
         EXPECT_LT(off.timeNs - on.timeNs,
-                  (board.settleMs * 1000 + board.sim.frameIntervalUs + board.camera.exposureUs + 15000) * 1000LL);
+                  (board.settleMs * 1000 + board.sim.frameIntervalUs + board.camera.exposureUs + 100000) * 1000LL);
+        EXPECT_LT(off.timeNs - on.timeNs, board.light.maxOnMs * 1000000LL);
     }
 }
 
