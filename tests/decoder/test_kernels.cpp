@@ -66,12 +66,10 @@ TEST(DecoderKernels, GradientRowMatchesReferenceOnRandomRowsOfEveryWidth)
 
 TEST(DecoderKernels, GradientRowMatchesReferenceOnSimulatorFrames)
 {
-    for (auto [kind, albedo, noise] : {std::tuple{hal::sim::SceneKind::TexturedRelief, hal::sim::Albedo::Photo, 4.0},
-                                       std::tuple{hal::sim::SceneKind::Fan, hal::sim::Albedo::Uniform, 2.0}}) {
-        const cv::Mat frame = renderFrame(kind, albedo, noise);
-        ASSERT_FALSE(frame.empty());
-        EXPECT_EQ(gradientRowsDiffering(frame), 0);
-    }
+    // One frame per test: rendering dominates the run time under qemu.
+    const cv::Mat frame = renderFrame(hal::sim::SceneKind::TexturedRelief, hal::sim::Albedo::Photo, 4);
+    ASSERT_FALSE(frame.empty());
+    EXPECT_EQ(gradientRowsDiffering(frame), 0);
 }
 
 // Samples whose fast projected gradient is not bit-equal to the reference.
