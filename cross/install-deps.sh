@@ -25,7 +25,7 @@ ARM64_PACKAGES="
   libgtest-dev:arm64 libgmock-dev:arm64 libbenchmark-dev:arm64
 "
 ROOTFS_PACKAGES="
-  mmdebstrap qemu-user-static binfmt-support
+  mmdebstrap arch-test qemu-user-static binfmt-support uidmap e2fsprogs
 "
 
 usage() {
