@@ -38,8 +38,13 @@ TEST(BoardFile, ShippedSimBoardLoads)
     EXPECT_EQ(board->camera.backend, "sim");
     EXPECT_EQ(board->camera.width, 780);
     EXPECT_EQ(board->calibrationPath, std::string(STRIA_SOURCE_DIR) + "/board/sim/calibration.yaml");
-    EXPECT_EQ(board->sim.scene, "relief");
+    EXPECT_EQ(board->sim.scene, "fingertip");  // the simulated fingerprint head
     EXPECT_LT(board->settleMs + board->camera.exposureUs / 1000, board->light.maxOnMs);
+
+    auto desktop = stria::firmware::loadBoardFile(std::string(STRIA_SOURCE_DIR) + "/board/sim-desktop/board.yaml");
+    ASSERT_TRUE(desktop.isOk()) << desktop.message();
+    EXPECT_EQ(desktop->name, "sim-desktop");
+    EXPECT_EQ(desktop->sim.scene, "relief");
 }
 
 TEST(BoardFile, DefaultsAndRelativePaths)

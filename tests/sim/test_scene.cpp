@@ -393,25 +393,31 @@ TEST(IdealEdgeCrossings, CountsPatternEdgesBetweenLitContinuousNeighbours)
     EXPECT_EQ(idealEdgeCrossings(r, rig.pattern), 11);
 }
 
-TEST(BoardSim, CalibrationAndPatternFilesAreTheDesktopRig)
+// The simulated boards' files are exactly the simulator's rigs, so the
+// simulated camera and the decoder agree on the geometry.
+TEST(BoardSim, CalibrationAndPatternFilesAreTheSimulatorsRigs)
 {
-    const SimRig rig = desktopRig();
-    const auto loaded = firmware::loadCalibrationFile(std::string(STRIA_SOURCE_DIR) + "/board/sim/calibration.yaml");
-    ASSERT_TRUE(loaded) << loaded.message();
-    EXPECT_EQ(loaded->camera().width, 780);
-    EXPECT_EQ(loaded->camera().height, 580);
-    EXPECT_EQ(loaded->projector().width, 1024);
-    EXPECT_LT(cv::norm(loaded->camera().K, rig.rig.camera().K, cv::NORM_INF), 1e-9);
-    EXPECT_LT(cv::norm(loaded->projector().K, rig.rig.projector().K, cv::NORM_INF), 1e-9);
-    EXPECT_LT(cv::norm(loaded->camera().distortion, rig.rig.camera().distortion, cv::NORM_INF), 1e-12);
-    EXPECT_LT(cv::norm(loaded->projector().distortion, rig.rig.projector().distortion, cv::NORM_INF), 1e-12);
-    EXPECT_LT(cv::norm(loaded->R(), rig.rig.R(), cv::NORM_INF), 1e-12);
-    EXPECT_LT(cv::norm(loaded->T(), rig.rig.T(), cv::NORM_INF), 1e-9);
-    const auto pattern = firmware::loadPatternFile(std::string(STRIA_SOURCE_DIR) + "/board/sim/pattern.yaml");
-    ASSERT_TRUE(pattern) << pattern.message();
-    EXPECT_EQ(pattern->colorLetters(), rig.pattern.colorLetters());
-    EXPECT_EQ(pattern->stripeWidth(), 8);
-    EXPECT_EQ(pattern->window(), 4);
+    const std::pair<const char*, SimRig> boards[] = {{"sim", fingerprintRig()}, {"sim-desktop", desktopRig()}};
+    for (const auto& [name, rig] : boards) {
+        SCOPED_TRACE(name);
+        const std::string folder = std::string(STRIA_SOURCE_DIR) + "/board/" + name;
+        const auto loaded = firmware::loadCalibrationFile(folder + "/calibration.yaml");
+        ASSERT_TRUE(loaded) << loaded.message();
+        EXPECT_EQ(loaded->camera().width, rig.rig.camera().width);
+        EXPECT_EQ(loaded->camera().height, rig.rig.camera().height);
+        EXPECT_EQ(loaded->projector().width, rig.rig.projector().width);
+        EXPECT_LT(cv::norm(loaded->camera().K, rig.rig.camera().K, cv::NORM_INF), 1e-9);
+        EXPECT_LT(cv::norm(loaded->projector().K, rig.rig.projector().K, cv::NORM_INF), 1e-9);
+        EXPECT_LT(cv::norm(loaded->camera().distortion, rig.rig.camera().distortion, cv::NORM_INF), 1e-12);
+        EXPECT_LT(cv::norm(loaded->projector().distortion, rig.rig.projector().distortion, cv::NORM_INF), 1e-12);
+        EXPECT_LT(cv::norm(loaded->R(), rig.rig.R(), cv::NORM_INF), 1e-12);
+        EXPECT_LT(cv::norm(loaded->T(), rig.rig.T(), cv::NORM_INF), 1e-9);
+        const auto pattern = firmware::loadPatternFile(folder + "/pattern.yaml");
+        ASSERT_TRUE(pattern) << pattern.message();
+        EXPECT_EQ(pattern->colorLetters(), rig.pattern.colorLetters());
+        EXPECT_EQ(pattern->stripeWidth(), rig.pattern.stripeWidth());
+        EXPECT_EQ(pattern->window(), rig.pattern.window());
+    }
 }
 
 TEST(SimRigs, RendererFindsTheWorkingDistanceFromTheGeometry)
