@@ -20,6 +20,12 @@ jobs=${CTEST_PARALLEL_LEVEL:-$(nproc)}
 
 cmake --preset "$preset"
 cmake --build --preset "$preset"
+# The host program for the comparison, built now from the same sources:
+# reuses CI's host build, or builds just the program.
+if [ ! -x build/host/firmware/stria ]; then
+	cmake --preset host >/dev/null
+fi
+cmake --build --preset host --target stria
 
 # Start-up check first: a binary that hangs in qemu would otherwise cost
 # every test its whole timeout. SIGKILL because a hung qemu ignores SIGTERM.
@@ -31,12 +37,6 @@ fi
 status=0
 # shellcheck disable=SC2086 # $skip_labels is two words or none
 ctest --preset "$preset" --parallel "$jobs" $skip_labels || status=$?
-
-# The host build for the comparison: reuse CI's, or build just the program.
-if [ ! -x build/host/firmware/stria ]; then
-	cmake --preset host >/dev/null
-fi
-cmake --build --preset host --target stria
 cross/compare-arm64.sh build/host/firmware/stria "build/$preset/firmware/stria" ||
 	{ [ $status -ne 0 ] || status=1; }
 exit $status
