@@ -1,6 +1,7 @@
 // decode() performs no heap allocation after create(): every allocation in
 // this process is counted (global operator new/delete and the C allocator are
 // replaced in this binary only) and decoding frames 2..N must add none.
+#include "tests/support/allocation_counter.hpp"
 #include "hal/sim/scene/scene.hpp"
 #include "pipeline/decoder.hpp"
 
@@ -10,74 +11,12 @@
 #include <cstdlib>
 #include <new>
 
-#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__) || defined(__SANITIZE_MEMORY__)
-#define STRIA_COUNT_ALLOCATIONS 0
-#else
-#define STRIA_COUNT_ALLOCATIONS 1
-#endif
-
-namespace {
-std::atomic<long> allocations{0};
-}
-
-#if STRIA_COUNT_ALLOCATIONS
-extern "C" {
-void* __libc_malloc(std::size_t);
-void* __libc_calloc(std::size_t, std::size_t);
-void* __libc_realloc(void*, std::size_t);
-void* __libc_memalign(std::size_t, std::size_t);
-void __libc_free(void*);
-
-void* malloc(std::size_t size)
-{
-    ++allocations;
-    return __libc_malloc(size);
-}
-void* calloc(std::size_t n, std::size_t size)
-{
-    ++allocations;
-    return __libc_calloc(n, size);
-}
-void* realloc(void* p, std::size_t size)
-{
-    ++allocations;
-    return __libc_realloc(p, size);
-}
-void* aligned_alloc(std::size_t alignment, std::size_t size)
-{
-    ++allocations;
-    return __libc_memalign(alignment, size);
-}
-int posix_memalign(void** out, std::size_t alignment, std::size_t size)
-{
-    ++allocations;
-    *out = __libc_memalign(alignment, size);
-    return *out ? 0 : ENOMEM;
-}
-void free(void* p) { __libc_free(p); }
-}
-
-void* operator new(std::size_t size)
-{
-    ++allocations;
-    if (void* p = __libc_malloc(size ? size : 1)) return p;
-    throw std::bad_alloc();
-}
-void* operator new[](std::size_t size) { return operator new(size); }
-void operator delete(void* p) noexcept { __libc_free(p); }
-void operator delete[](void* p) noexcept { __libc_free(p); }
-void operator delete(void* p, std::size_t) noexcept { __libc_free(p); }
-void operator delete[](void* p, std::size_t) noexcept { __libc_free(p); }
-#endif
-
 namespace stria {
 namespace {
 
 TEST(DecoderAllocation, DecodingFramesTwoToNAllocatesNothing)
 {
-#if !STRIA_COUNT_ALLOCATIONS
-    GTEST_SKIP() << "sanitizer build: the allocator is the sanitizer's";
-#endif
+    if (!test::kCountingAllocations) GTEST_SKIP() << "sanitizer build: the allocator is the sanitizer's";
     const hal::sim::SimRig rig = hal::sim::desktopRig();
     const hal::sim::Scene scene = hal::sim::makeScene(hal::sim::SceneKind::TexturedRelief, rig, hal::sim::Albedo::Photo, 1);
     hal::sim::SceneRenderer renderer(rig);
@@ -98,7 +37,7 @@ TEST(DecoderAllocation, DecodingFramesTwoToNAllocatesNothing)
     ASSERT_TRUE(first);
     ASSERT_GT(first->points.size(), 40000u);
 
-    const long before = allocations.load();
+    const long before = test::allocationCount();
     std::size_t points = 0;
     for (std::size_t i = 1; i < frames.size(); ++i) {
         auto result = (*decoder)->decode(view(frames[i].image));
@@ -106,7 +45,7 @@ TEST(DecoderAllocation, DecodingFramesTwoToNAllocatesNothing)
         points += result->points.size();
         (*decoder)->fillDepthMap(depth);
     }
-    const long added = allocations.load() - before;
+    const long added = test::allocationCount() - before;
     EXPECT_EQ(added, 0);
     EXPECT_GT(points, 3u * 30000u);  // the frames were really decoded
 }

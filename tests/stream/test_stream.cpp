@@ -2,6 +2,7 @@
 // decoded or counted as dropped, steady-state streaming allocates nothing
 // (global operator new and the C allocator are replaced in this binary and
 // count), and the LED is on while streaming and off on every way out.
+#include "tests/support/allocation_counter.hpp"
 #include "firmware/app/stop_signals.hpp"
 #include "firmware/app/stream.hpp"
 #include "hal/clock.hpp"
@@ -20,66 +21,6 @@
 #include <cstdio>
 #include <new>
 #include <thread>
-
-#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__) || defined(__SANITIZE_MEMORY__)
-#define STRIA_COUNT_ALLOCATIONS 0
-#else
-#define STRIA_COUNT_ALLOCATIONS 1
-#endif
-
-namespace {
-std::atomic<long> allocations{0};
-}
-
-#if STRIA_COUNT_ALLOCATIONS
-extern "C" {
-void* __libc_malloc(std::size_t);
-void* __libc_calloc(std::size_t, std::size_t);
-void* __libc_realloc(void*, std::size_t);
-void* __libc_memalign(std::size_t, std::size_t);
-void __libc_free(void*);
-
-void* malloc(std::size_t size)
-{
-    ++allocations;
-    return __libc_malloc(size);
-}
-void* calloc(std::size_t n, std::size_t size)
-{
-    ++allocations;
-    return __libc_calloc(n, size);
-}
-void* realloc(void* p, std::size_t size)
-{
-    ++allocations;
-    return __libc_realloc(p, size);
-}
-void* aligned_alloc(std::size_t alignment, std::size_t size)
-{
-    ++allocations;
-    return __libc_memalign(alignment, size);
-}
-int posix_memalign(void** out, std::size_t alignment, std::size_t size)
-{
-    ++allocations;
-    *out = __libc_memalign(alignment, size);
-    return *out ? 0 : ENOMEM;
-}
-void free(void* p) { __libc_free(p); }
-}
-
-void* operator new(std::size_t size)
-{
-    ++allocations;
-    if (void* p = __libc_malloc(size ? size : 1)) return p;
-    throw std::bad_alloc();
-}
-void* operator new[](std::size_t size) { return operator new(size); }
-void operator delete(void* p) noexcept { __libc_free(p); }
-void operator delete[](void* p) noexcept { __libc_free(p); }
-void operator delete(void* p, std::size_t) noexcept { __libc_free(p); }
-void operator delete[](void* p, std::size_t) noexcept { __libc_free(p); }
-#endif
 
 namespace stria {
 namespace {
@@ -203,9 +144,7 @@ TEST_F(StreamTest, ARingWithRoomLosesNothing)
 
 TEST_F(StreamTest, SteadyStateStreamingAllocatesNothingPerFrame)
 {
-#if !STRIA_COUNT_ALLOCATIONS
-    GTEST_SKIP() << "sanitizer build: the allocator is the sanitizer's";
-#endif
+    if (!test::kCountingAllocations) GTEST_SKIP() << "sanitizer build: the allocator is the sanitizer's";
     // Two runs that differ only in their length: everything run() allocates
     // (its thread) is allocated once per run, so the longer run must not
     // allocate more. The ring holds every frame, so all are decoded whatever
@@ -222,9 +161,9 @@ TEST_F(StreamTest, SteadyStateStreamingAllocatesNothingPerFrame)
         auto streamer = Streamer::create(*cam, light_, *decoder_, config_, options_);
         EXPECT_TRUE(streamer) << streamer.message();
         if (!streamer) return -1L;
-        const long before = allocations.load();
+        const long before = test::allocationCount();
         summary = (*streamer)->run();
-        return allocations.load() - before;
+        return test::allocationCount() - before;
     };
     // A first run pays for what the C library allocates on first use (stdio buffers).
     StreamSummary warmUp, shortRun, longRun;
