@@ -91,17 +91,22 @@ private:
     Status status_;
 };
 
+// The keys every GPIO-backed device shares (light, status LED, button).
+void readGpioLine(Section& s, std::string& backend, std::string& chip, int& line, bool& activeLow)
+{
+    s.choice("backend", backend, {"sim", "gpiod"}, true);
+    s.text("chip", chip);
+    s.integer("line", line, 0, 4095);
+    s.flag("active_low", activeLow);
+    if (s.status() && backend == "gpiod" && (chip.empty() || line < 0)) s.fail("backend", "gpiod needs 'chip' and 'line'");
+}
+
 Status readLight(const cv::FileNode& node, const char* name, BoardLight& light)
 {
     Section s(node, name);
     if (!s.present()) return Status::error(std::string("section '") + name + "' is missing");
-    s.choice("backend", light.backend, {"sim", "gpiod"}, true);
-    s.text("chip", light.chip);
-    s.integer("line", light.line, 0, 4095);
-    s.flag("active_low", light.activeLow);
+    readGpioLine(s, light.backend, light.chip, light.line, light.activeLow);
     s.integer("max_on_ms", light.maxOnMs, 1, 60000);
-    if (s.status() && light.backend == "gpiod" && (light.chip.empty() || light.line < 0))
-        s.fail("backend", "gpiod needs 'chip' and 'line'");
     return s.status();
 }
 
@@ -155,13 +160,8 @@ Result<BoardConfig> parseBoard(const std::string& text, const std::string& sourc
     Section button(root["button"], "button");
     if (!button.present()) return Status::error(where + "section 'button' is missing");
     BoardButton& btn = board.button;
-    button.choice("backend", btn.backend, {"sim", "gpiod"}, true);
-    button.text("chip", btn.chip);
-    button.integer("line", btn.line, 0, 4095);
-    button.flag("active_low", btn.activeLow);
+    readGpioLine(button, btn.backend, btn.chip, btn.line, btn.activeLow);
     button.integer("debounce_ms", btn.debounceMs, 0, 1000);
-    if (button.status() && btn.backend == "gpiod" && (btn.chip.empty() || btn.line < 0))
-        button.fail("backend", "gpiod needs 'chip' and 'line'");
     if (!button.status()) return button.status().withContext(where);
 
     Section decoder(root["decoder"], "decoder");
