@@ -30,4 +30,19 @@ void projectedGradientsReference(const std::uint8_t* row, int first, int count, 
 void projectedGradients(const std::uint8_t* row, int first, int count, const std::array<int, 3>& rgbOffset,
                         const cv::Matx33f& m, const cv::Vec3f& weight, float* out);
 
+// Region colour statistics (regions.cpp). A 256-bin count of byte values.
+using ValueHistogram = std::array<std::int32_t, 256>;
+// Adds one BGR/RGB row's values to the R, G, B histograms (rgbOffset: byte
+// offset of R, G, B within a pixel).
+void channelHistogramsReference(const std::uint8_t* row, int width, const std::array<int, 3>& rgbOffset,
+                                std::array<ValueHistogram, 3>& histogram);
+void channelHistograms(const std::uint8_t* row, int width, const std::array<int, 3>& rgbOffset,
+                       std::array<ValueHistogram, 3>& histogram);
+// One row of the counting sort of labels by value: for each pixel x, in order,
+// out[cursor[v]++] = labels[x] where v = values[3 * x] (one channel of the row).
+void scatterLabelsByValueReference(const std::uint8_t* values, const std::int32_t* labels, int width,
+                                   std::int32_t* cursor, std::int32_t* out);
+void scatterLabelsByValue(const std::uint8_t* values, const std::int32_t* labels, int width, std::int32_t* cursor,
+                          std::int32_t* out);
+
 }  // namespace stria::pipeline

@@ -1,6 +1,8 @@
 // Edge location kernels (pipeline/decoder/simd.hpp).
 #include "pipeline/decoder/simd.hpp"
 
+#include <cstring>
+
 #if defined(__ARM_NEON)
 #include <arm_neon.h>
 #endif
@@ -44,6 +46,38 @@ void projectedGradients(const std::uint8_t* row, int first, int count, const std
             }
             vst1q_f32(out + k + 4 * half, sum);
         }
+    }
+#else
+    // 4 samples per step in GCC vector lanes (exact IEEE float per lane):
+    // the reference's products and sums in its order, each sum from 0. A
+    // ragged end is one more step ending at the last sample (the overlapping
+    // samples are written twice with the same values).
+    using Int4 = std::int32_t __attribute__((vector_size(16)));
+    using Float4 = float __attribute__((vector_size(16)));
+    const Float4 zero = {0, 0, 0, 0};
+    // Local copies: the stores to out could alias m and weight.
+    const cv::Matx33f mm = m;
+    const cv::Vec3f ww = weight;
+    const std::array<int, 3> o = rgbOffset;
+    auto step = [&](int k) {
+        const std::uint8_t* p = row + 3 * (first + k);
+        Float4 raw[3];
+        for (int c = 0; c < 3; ++c) {
+            const std::uint8_t* q = p + o[c];
+            const Int4 d = {q[3] - q[0], q[6] - q[3], q[9] - q[6], q[12] - q[9]};
+            raw[c] = __builtin_convertvector(d, Float4);
+        }
+        Float4 sum = zero;
+        for (int r = 0; r < 3; ++r) {
+            const Float4 corrected = zero + mm(r, 0) * raw[0] + mm(r, 1) * raw[1] + mm(r, 2) * raw[2];
+            sum = sum + ww[r] * corrected;
+        }
+        std::memcpy(out + k, &sum, sizeof sum);
+    };
+    for (; k + 4 <= count; k += 4) step(k);
+    if (k < count && count >= 4) {
+        step(count - 4);
+        return;
     }
 #endif
     projectedGradientsReference(row, first + k, count - k, rgbOffset, m, weight, out + k);

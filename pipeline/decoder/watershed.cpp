@@ -21,6 +21,7 @@
 // bounds the total.
 #include "pipeline/decoder/workspace.hpp"
 
+#include <algorithm>
 #include <array>
 
 namespace stria::pipeline {
@@ -39,6 +40,7 @@ void computeWatershed(DecoderWorkspace& ws)
     std::int32_t* order = ws.pixelOrder;
     std::int32_t* blocks = ws.scratch.get();
     constexpr int kLink = kQueueBlock - 1;
+    constexpr std::int32_t kBorder = -2, kPixel = 0x7fffffff;
 
     // Level histogram in four interleaved copies: most pixels share level 0,
     // and one counter would make each increment wait for the previous one.
@@ -54,7 +56,12 @@ void computeWatershed(DecoderWorkspace& ws)
         for (int l = 0; l < 256; ++l) fill[l] = start[l];
         for (int p = 0; p < n; ++p) order[fill[g[p]]++] = p;
     }
-    for (int p = 0; p < n; ++p) label[p] = -1;
+    // Unlabelled pixels hold -1, or kBorder on the image border; a queue
+    // entry carries that in its sign bit, so a pop needs no coordinates
+    // unless the pixel is on the border.
+    std::fill(label, label + n, -1);
+    for (int x = 0; x < w; ++x) label[x] = label[n - w + x] = kBorder;
+    for (int y = 0; y < h; ++y) label[y * w] = label[y * w + w - 1] = kBorder;
 
     // Queue of a level: entries from head to tail, both positions in blocks;
     // -1 until the level's first push.
@@ -62,7 +69,8 @@ void computeWatershed(DecoderWorkspace& ws)
     head.fill(-1);
     tail.fill(-1);
     std::int32_t freeBlock = 0;
-    auto push = [&](int level, std::int32_t p) {
+    // p's label before it was labelled tells whether it is on the border.
+    auto push = [&](int level, std::int32_t p, std::int32_t unlabelled) {
         std::int32_t& t = tail[level];
         if (t < 0) {
             t = head[level] = freeBlock++ * kQueueBlock;
@@ -71,7 +79,7 @@ void computeWatershed(DecoderWorkspace& ws)
             blocks[t] = block;
             t = block;
         }
-        blocks[t++] = p;
+        blocks[t++] = unlabelled == kBorder ? p | ~kPixel : p;
     };
     const double inverseWidth = 1.0 / w;
     auto drain = [&](int level) {
@@ -81,16 +89,24 @@ void computeWatershed(DecoderWorkspace& ws)
                 hd = blocks[hd];
                 continue;
             }
-            const std::int32_t p = blocks[hd++];
+            const std::int32_t entry = blocks[hd++];
+            const std::int32_t p = entry & kPixel, l = label[p];
+            auto visit = [&](std::int32_t q) {
+                const std::int32_t old = label[q];
+                if (old >= 0) return;
+                label[q] = l;
+                push(g[q] > level ? g[q] : level, q, old);
+            };
+            if (entry >= 0) {
+                visit(p - 1);
+                visit(p + 1);
+                visit(p - w);
+                visit(p + w);
+                continue;
+            }
             // (p + 0.5) / w is at least 0.5 / w from an integer: the double
             // quotient truncates exactly, and faster than an integer division.
             const int y = static_cast<int>((p + 0.5) * inverseWidth), x = p - y * w;
-            const std::int32_t l = label[p];
-            auto visit = [&](std::int32_t q) {
-                if (label[q] >= 0) return;
-                label[q] = l;
-                push(g[q] > level ? g[q] : level, q);
-            };
             if (x > 0) visit(p - 1);
             if (x + 1 < w) visit(p + 1);
             if (y > 0) visit(p - w);
@@ -102,14 +118,14 @@ void computeWatershed(DecoderWorkspace& ws)
     for (int level = 0; level < 256; ++level) {
         drain(level);
         for (int i = start[level]; i < start[level + 1]; ++i) {
-            const std::int32_t p = order[i];
-            if (label[p] >= 0) continue;
+            const std::int32_t p = order[i], old = label[p];
+            if (old >= 0) continue;
             if (regions == ws.maxRegions) {
                 ws.truncated = true;
                 continue;  // flooded later from a neighbouring basin
             }
             label[p] = regions++;
-            push(level, p);
+            push(level, p, old);
             drain(level);
         }
     }

@@ -77,12 +77,13 @@ struct DecoderWorkspace {
     std::unique_ptr<std::uint8_t[]> gradient;
     std::unique_ptr<std::int32_t[]> labels;
     // One buffer, three uses in turn: pixel indices by gradient level
-    // (watershed), then by label (regions), then the output points (depth).
+    // (watershed), then labels by channel value (regions), then the output
+    // points (depth).
     // Points are 24 bytes, so maxPoints = pixels / 6 fits exactly.
     std::unique_ptr<std::byte[]> orderAndPoints;
     std::int32_t* pixelOrder = nullptr;
     ScanPoint* points = nullptr;
-    std::unique_ptr<std::int32_t[]> scratch;  // gradient row lanes, watershed queue blocks, median bytes
+    std::unique_ptr<std::int32_t[]> scratch;  // gradient row lanes, watershed queue blocks, region sums
 
     // Graph.
     int maxRegions = 0, maxEdges = 0, maxPoints = 0;
@@ -115,6 +116,8 @@ struct DecoderWorkspace {
 // Watershed queue: entries per block, and the scratch entries it needs.
 constexpr int kQueueBlock = 16;  // one cache line
 std::size_t queueScratchEntries(std::size_t pixels);
+// Region statistics: the scratch entries they need.
+std::size_t regionScratchEntries(std::size_t regions);
 
 // The stages, in order.
 void computeGradient(DecoderWorkspace& ws);
@@ -133,5 +136,8 @@ struct EqualizedChange {
 EqualizedChange equalizedChange(const DecoderWorkspace& ws, int from, int to);
 float matchError(const std::array<float, 3>& c, SymbolCode symbol, float t);
 SymbolCode optimalSymbol(const std::array<float, 3>& c, float t);
+// matchError of `symbol` after removing the change common to all channels
+// that a texture edge adds, as far as it is plausible (edges.cpp).
+float symbolError(const std::array<float, 3>& c, SymbolCode symbol, float t);
 
 }  // namespace stria::pipeline

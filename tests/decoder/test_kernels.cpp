@@ -1,13 +1,15 @@
 // The decoder's fast kernels against their scalar references, exactly: the
 // gradient row (NEON on ARM, int16 lanes elsewhere) on random rows and
-// simulator frames, and the block-queue watershed against the plain
-// linked-list flooding it replaced, label for label.
+// simulator frames, the block-queue watershed against the plain linked-list
+// flooding it replaced, label for label, and the counting-sort region colours
+// against the nth_element medians they replaced.
 #include "hal/sim/scene/scene.hpp"
 #include "pipeline/decoder/simd.hpp"
 #include "pipeline/decoder/workspace.hpp"
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <random>
 #include <vector>
@@ -162,6 +164,38 @@ int referenceWatershed(const std::uint8_t* g, int w, int h, int maxRegions, std:
     return regions;
 }
 
+// The region statistics as first written: each region's pixels gathered in
+// raster order, each channel's median (index size / 2) by nth_element, the
+// centroid from integer coordinate sums.
+std::vector<Region> referenceRegionColours(const DecoderWorkspace& ws)
+{
+    std::vector<std::vector<std::int32_t>> pixels(ws.regionCount);
+    for (int p = 0; p < ws.width * ws.height; ++p) pixels[ws.labels[p]].push_back(p);
+    std::vector<Region> regions(ws.regionCount);
+    for (int r = 0; r < ws.regionCount; ++r) {
+        const int size = static_cast<int>(pixels[r].size());
+        long long sx = 0, sy = 0;
+        std::array<std::vector<std::uint8_t>, 3> channel;
+        for (const std::int32_t p : pixels[r]) {
+            const int y = p / ws.width, x = p % ws.width;
+            sx += x;
+            sy += y;
+            for (int c = 0; c < 3; ++c) channel[c].push_back(ws.frame.row(y)[3 * x + ws.rgbOffset[c]]);
+        }
+        cv::Vec3f median;
+        for (int c = 0; c < 3; ++c) {
+            std::nth_element(channel[c].begin(), channel[c].begin() + size / 2, channel[c].end());
+            median[c] = channel[c][size / 2];
+        }
+        const cv::Vec3f corrected = ws.colorCorrection * median;
+        regions[r].color = {corrected[0], corrected[1], corrected[2]};
+        regions[r].pixelCount = size;
+        regions[r].centroidX = static_cast<float>(static_cast<double>(sx) / size);
+        regions[r].centroidY = static_cast<float>(static_cast<double>(sy) / size);
+    }
+    return regions;
+}
+
 // A workspace with just the buffers of the gradient and watershed stages,
 // sized as Decoder::create() sizes them.
 struct FloodCase {
@@ -176,7 +210,10 @@ struct FloodCase {
         ws.labels = std::make_unique<std::int32_t[]>(n);
         ws.orderAndPoints = std::make_unique<std::byte[]>(4 * n);
         ws.pixelOrder = reinterpret_cast<std::int32_t*>(ws.orderAndPoints.get());
-        ws.scratch = std::make_unique<std::int32_t[]>(std::max({n, queueScratchEntries(n), 6 * n / image.rows}));
+        ws.scratch = std::make_unique<std::int32_t[]>(
+            std::max({queueScratchEntries(n), regionScratchEntries(maxRegions), 6 * n / image.rows}));
+        ws.regions = std::make_unique<Region[]>(maxRegions);
+        ws.colorCorrection = cv::Matx33f(0.9f, 0.08f, 0.02f, 0.1f, 0.8f, 0.1f, 0.03f, 0.12f, 0.85f).inv();
         ws.frame = {image.data, image.cols, image.rows, static_cast<std::ptrdiff_t>(image.step), PixelFormat::Bgr8};
     }
     // Labels that differ from the reference's; also the region counts.
@@ -190,12 +227,27 @@ struct FloodCase {
         for (std::size_t p = 0; p < reference.size(); ++p) differing += ws.labels[p] != reference[p];
         return differing;
     }
+    // Regions whose pixel count, centroid or colour differ (bitwise) from the
+    // reference's, after the watershed ran.
+    int differingRegions()
+    {
+        computeRegions(ws);
+        const std::vector<Region> reference = referenceRegionColours(ws);
+        int differing = 0;
+        for (int r = 0; r < ws.regionCount; ++r) {
+            const Region& a = ws.regions[r];
+            const Region& b = reference[r];
+            differing += a.pixelCount != b.pixelCount || a.centroidX != b.centroidX || a.centroidY != b.centroidY ||
+                         a.color != b.color;
+        }
+        return differing;
+    }
     cv::Mat frame;
     DecoderWorkspace ws;
     int referenceRegions = -1;
 };
 
-TEST(DecoderKernels, WatershedMatchesLinkedListReferenceOnSimulatorFrames)
+TEST(DecoderKernels, WatershedLabelsAndRegionColoursMatchReferencesOnSimulatorFrame)
 {
     const cv::Mat frame = renderFrame(hal::sim::SceneKind::TexturedRelief, hal::sim::Albedo::Photo, 4);
     ASSERT_FALSE(frame.empty());
@@ -204,9 +256,10 @@ TEST(DecoderKernels, WatershedMatchesLinkedListReferenceOnSimulatorFrames)
     EXPECT_EQ(c.ws.regionCount, c.referenceRegions);
     EXPECT_GT(c.ws.regionCount, 1000);  // thousands of basins flooded at once
     EXPECT_FALSE(c.ws.truncated);
+    EXPECT_EQ(c.differingRegions(), 0);
 }
 
-TEST(DecoderKernels, WatershedMatchesReferenceOnNoiseAndWhenTruncated)
+TEST(DecoderKernels, WatershedLabelsAndRegionColoursMatchReferencesOnNoiseAndWhenTruncated)
 {
     // Random bytes: the most irregular basins and queue traffic.
     const cv::Mat noise = randomFrame(97, 61, 11);
@@ -218,6 +271,11 @@ TEST(DecoderKernels, WatershedMatchesReferenceOnNoiseAndWhenTruncated)
     EXPECT_EQ(truncated.differingLabels(), 0);
     EXPECT_EQ(truncated.ws.regionCount, full.ws.regionCount / 2);
     EXPECT_TRUE(truncated.ws.truncated);
+    // Regions of one pixel up to large flooded ones, both byte orders.
+    EXPECT_EQ(full.differingRegions(), 0);
+    EXPECT_EQ(truncated.differingRegions(), 0);
+    truncated.ws.rgbOffset = {0, 1, 2};
+    EXPECT_EQ(truncated.differingRegions(), 0);
 }
 
 }  // namespace
