@@ -8,9 +8,9 @@
 //     drop out, until one remains (at the latest after window() edges).
 //  2. Best-first propagation from the path's regions with a heap keyed by edge
 //     error. A neighbour is a stripe further (forward/backward edge, expected
-//     pattern symbol, possibly not the optimal one) or the same stripe (null
-//     edge, fig. 6: weak edge, and the virtual edge from the reference region
-//     has the same symbol). Edges above A pass only on a token from the
+//     pattern symbol, possibly not the optimal one) or, along the stripes, the
+//     same stripe (null edge, fig. 6: weak parallel edge, and the virtual edge
+//     from the reference region has the same symbol). Edges above A pass only on a token from the
 //     bucket, which good edges refill. A region reached again with another
 //     stripe keeps the one with the lower position error Q (eq. 10).
 // Afterwards three checks drop false positives: regions whose edges across the
@@ -97,7 +97,7 @@ private:
     float edgeError(int from, int to, const GraphEdge& edge, SymbolCode symbol, float* positionError) const
     {
         const EqualizedChange change = equalizedChange(ws_, from, to);
-        const float match = matchError(change.c, symbol, t_);
+        const float match = symbolError(change.c, symbol, t_);
         if (positionError) *positionError = beta_ * match / std::max(change.weight, 1.0f) + edge.gradientError;
         return match + alpha_ * edge.gradientError;
     }
@@ -213,7 +213,12 @@ private:
         }
         // Null edge (fig. 6): weak relative to the reference edge, and the
         // (possibly virtual) edge reference -> `to` has the reference edge's symbol.
-        if (f.reference >= 0) {
+        // Only along the stripes: across them the pattern changes at every
+        // edge, and at low contrast a weak stripe edge taken for a null edge
+        // slips the decoding by a stripe (photo texture, contrast 0.3:
+        // patches 1-5 stripes off; inliers 77% -> 86%, outliers 0.20% ->
+        // 0.10%, fan outliers 0.85% -> 0.72%).
+        if (f.reference >= 0 && dir == EdgeDirection::Parallel) {
             const Region& ref = ws_.regions[f.reference];
             float referenceWeight = 0;
             for (int c = 0; c < 3; ++c) referenceWeight = std::max(referenceWeight, std::abs(f.color[c] - ref.color[c]));

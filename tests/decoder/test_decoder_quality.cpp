@@ -72,13 +72,10 @@ TEST(DecoderQuality, LowContrastWithAmbientLight)
     s.contrast = 0.3;
     s.ambient = 0.2;
     const SceneRun run = decodeScene(hal::sim::desktopRig(), SceneKind::TexturedRelief, Albedo::Photo, s);
-    // TARGET NOT REACHED: the issue asks >= 75% inliers; measured 42.1%
-    // (84% of the ideal stripe edges are borders between superpixels of the
-    // right stripes, but the texture's edges break the traversal; with uniform
-    // albedo the same settings give 97%). This guards the measured level and
-    // the outlier rate (measured 0.04%).
-    EXPECT_GE(run.score.inlierRatio(), 0.40);
-    EXPECT_LE(run.score.outlierRatio(), 0.001);
+    // Measured 85.7% inliers, 0.10% outliers (were 42.1% and 0.04% before
+    // the texture's common change was removed from the symbol match).
+    EXPECT_GE(run.score.inlierRatio(), 0.75);
+    EXPECT_LE(run.score.outlierRatio(), 0.0015);
 }
 
 TEST(DecoderQuality, LowContrastWithAmbientLightUniformAlbedo)
