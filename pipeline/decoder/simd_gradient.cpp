@@ -91,29 +91,36 @@ void gradientRow(const std::uint8_t* up, const std::uint8_t* row, const std::uin
 #if defined(__ARM_NEON)
     for (; x + 16 < width; x += 16) gradient16(up, row, down, alongY, x, magnitude, along);
 #else
-    // Per byte lane i (pixel i / 3, channel i % 3) of the interior pixels:
-    // separable Sobel in int16 loops the compiler vectorises, then the
-    // maximum over each pixel's three lanes.
+    // Per byte lane i (pixel i / 3, channel i % 3) of the interior pixels,
+    // in int16 loops the compiler vectorises: separable Sobel, then per lane
+    // the maximum over it and the next two (for i = 3x: pixel x's channels);
+    // only the final pick of every third lane is scalar.
     const int bytes = 3 * width;
-    std::int16_t* smooth = lanes;            // up + 2 row + down
-    std::int16_t* vertical = lanes + bytes;  // down - up
-    std::int16_t* gx = lanes + 2 * bytes;
-    std::int16_t* gy = lanes + 3 * bytes;
+    std::int16_t* smooth = lanes;            // up + 2 row + down, then the maximum of |dx| + |dy|
+    std::int16_t* vertical = lanes + bytes;  // down - up, then the maximum along
+    std::int16_t* sum = lanes + 2 * bytes;   // |dx| + |dy|
+    std::int16_t* alongLane = lanes + 3 * bytes;
     for (int i = 0; i < bytes; ++i) {
         smooth[i] = static_cast<std::int16_t>(up[i] + 2 * row[i] + down[i]);
         vertical[i] = static_cast<std::int16_t>(down[i] - up[i]);
     }
     for (int i = 3; i < bytes - 3; ++i) {
-        const int dx = smooth[i + 3] - smooth[i - 3], dy = vertical[i - 3] + 2 * vertical[i] + vertical[i + 3];
-        gx[i] = static_cast<std::int16_t>((dx < 0 ? -dx : dx) >> 2);
-        gy[i] = static_cast<std::int16_t>((dy < 0 ? -dy : dy) >> 2);
+        const std::int16_t dx = static_cast<std::int16_t>(smooth[i + 3] - smooth[i - 3]);
+        const std::int16_t dy = static_cast<std::int16_t>(vertical[i - 3] + 2 * vertical[i] + vertical[i + 3]);
+        const std::int16_t gx = static_cast<std::int16_t>((dx < 0 ? -dx : dx) >> 2);
+        const std::int16_t gy = static_cast<std::int16_t>((dy < 0 ? -dy : dy) >> 2);
+        sum[i] = static_cast<std::int16_t>(gx + gy);
+        alongLane[i] = alongY ? gy : gx;
     }
-    const std::int16_t* alongLanes = alongY ? gy : gx;
+    std::int16_t* best = smooth;
+    std::int16_t* bestAlong = vertical;
+    for (int i = 3; i < bytes - 5; ++i) {
+        best[i] = std::max(std::max(sum[i], sum[i + 1]), sum[i + 2]);
+        bestAlong[i] = std::max(std::max(alongLane[i], alongLane[i + 1]), alongLane[i + 2]);
+    }
     for (; x + 1 < width; ++x) {
-        const int i = 3 * x;
-        const int best = std::max({gx[i] + gy[i], gx[i + 1] + gy[i + 1], gx[i + 2] + gy[i + 2]});
-        magnitude[x] = static_cast<std::uint8_t>((best + 1) >> 1);
-        along[x] = static_cast<std::uint8_t>(std::max({alongLanes[i], alongLanes[i + 1], alongLanes[i + 2]}));
+        magnitude[x] = static_cast<std::uint8_t>((best[3 * x] + 1) >> 1);
+        along[x] = static_cast<std::uint8_t>(bestAlong[3 * x]);
     }
 #endif
     for (; x < width; ++x) gradientPixel(up, row, down, width, alongY, x, magnitude, along);

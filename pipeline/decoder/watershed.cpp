@@ -63,23 +63,21 @@ void computeWatershed(DecoderWorkspace& ws)
     for (int x = 0; x < w; ++x) label[x] = label[n - w + x] = kBorder;
     for (int y = 0; y < h; ++y) label[y * w] = label[y * w + w - 1] = kBorder;
 
-    // Queue of a level: entries from head to tail, both positions in blocks;
-    // -1 until the level's first push.
+    // Queue of a level: entries from head to tail, both positions in blocks.
+    // Every level starts with its own block, so a push needs no test for a
+    // first block.
     std::array<std::int32_t, 256> head, tail;
-    head.fill(-1);
-    tail.fill(-1);
-    std::int32_t freeBlock = 0;
+    for (int l = 0; l < 256; ++l) head[l] = tail[l] = l * kQueueBlock;
+    std::int32_t freeBlock = 256;
     // p's label before it was labelled tells whether it is on the border.
     auto push = [&](int level, std::int32_t p, std::int32_t unlabelled) {
         std::int32_t& t = tail[level];
-        if (t < 0) {
-            t = head[level] = freeBlock++ * kQueueBlock;
-        } else if (t % kQueueBlock == kLink) {
+        blocks[t++] = unlabelled == kBorder ? p | ~kPixel : p;
+        if (t % kQueueBlock == kLink) {
             const std::int32_t block = freeBlock++ * kQueueBlock;
             blocks[t] = block;
             t = block;
         }
-        blocks[t++] = unlabelled == kBorder ? p | ~kPixel : p;
     };
     const double inverseWidth = 1.0 / w;
     auto drain = [&](int level) {
