@@ -295,7 +295,8 @@ private:
     // by chance has the pattern contradicted by its other edges across the
     // stripes: weighed by border length, those that do not fit its stripe
     // (error >= tokenErrorLimit for the expected symbol, not a weak null
-    // edge, neighbour not decoded consistently) against those that do. Such
+    // edge, neighbour not decoded consistently), and weak edges along the
+    // stripes to a region of another stripe, against those that fit. Such
     // regions are undecoded when the contradicting border outweighs the
     // confirming one kContradictionRatio times; a region on a true boundary
     // keeps one confirming side, a wrongly offset one has almost none.
@@ -309,19 +310,26 @@ private:
             const Region& r = ws_.regions[v];
             if (r.stripe < 0) continue;
             int support = 0, contradiction = 0;
+            const float weakEdge = static_cast<float>(ws_.params.nullEdgeRatio) * maxChannelRange(r);
             for (int i = 0; i < r.degree; ++i) {
                 const GraphEdge& edge = ws_.edges[ws_.adjacency[r.adjacencyBegin + i]];
                 const EdgeDirection dir = directionFrom(edge, v);
-                if (dir == EdgeDirection::Parallel) continue;
                 const int w = otherEnd(edge, v);
-                const int expected = r.stripe + (dir == EdgeDirection::Forward ? 1 : -1);
                 const int neighbour = ws_.regions[w].stripe;
+                if (dir == EdgeDirection::Parallel) {
+                    // Along the stripes the stripe stays: a weak edge to a
+                    // region decoded as another stripe contradicts one of them.
+                    if (neighbour >= 0 && neighbour != r.stripe && edge.weight < weakEdge)
+                        contradiction += edge.borderCount;
+                    continue;
+                }
+                const int expected = r.stripe + (dir == EdgeDirection::Forward ? 1 : -1);
                 if (neighbour == r.stripe) continue;  // a null edge within the stripe
                 bool fits = false;
                 if (expected >= 0 && expected < pattern.stripeCount() && (neighbour < 0 || neighbour == expected))
                     fits = edgeError(v, w, edge, stripeSymbol(pattern, r.stripe, expected), nullptr) < limit;
                 if (fits) support += edge.borderCount;
-                else if (neighbour >= 0 || edge.weight >= ws_.params.nullEdgeRatio * maxChannelRange(r))
+                else if (neighbour >= 0 || edge.weight >= weakEdge)
                     contradiction += edge.borderCount;
             }
             reject[v] = contradiction > kContradictionRatio * support;

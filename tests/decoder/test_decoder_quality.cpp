@@ -72,10 +72,10 @@ TEST(DecoderQuality, LowContrastWithAmbientLight)
     s.contrast = 0.3;
     s.ambient = 0.2;
     const SceneRun run = decodeScene(hal::sim::desktopRig(), SceneKind::TexturedRelief, Albedo::Photo, s);
-    // Measured 85.7% inliers, 0.10% outliers (were 42.1% and 0.04% before
-    // the texture's common change was removed from the symbol match).
+    // Measured 85.5% inliers, 0.07% outliers (42.1% and 0.04% before the
+    // texture's common change was removed from the symbol match).
     EXPECT_GE(run.score.inlierRatio(), 0.75);
-    EXPECT_LE(run.score.outlierRatio(), 0.0015);
+    EXPECT_LE(run.score.outlierRatio(), 0.001);
 }
 
 TEST(DecoderQuality, LowContrastWithAmbientLightUniformAlbedo)
@@ -99,12 +99,13 @@ TEST(DecoderQuality, TiltedWhitePlaneIsPrecise)
 TEST(DecoderQuality, FanWithGapsHasFewOutliers)
 {
     const SceneRun run = decodeScene(hal::sim::desktopRig(), SceneKind::Fan, Albedo::Uniform, noise(2));
-    // TARGET NOT REACHED: the issue asks <= 0.2% outliers; measured 0.74%
+    // TARGET NOT REACHED: the issue asks <= 0.2% outliers; measured 0.64%
     // (strips of the wall between slats whose colours repeat the pattern next
-    // to the slat's last stripe, decoded across the depth step).
+    // to the slat's last stripe, decoded across the depth step; one of them,
+    // 0.37% of the points, is an exact ambiguity of the pattern).
     // This guards the measured level.
-    EXPECT_LE(run.score.outlierRatio(), 0.009);
-    EXPECT_GE(run.score.inlierRatio(), 0.70);
+    EXPECT_LE(run.score.outlierRatio(), 0.007);
+    EXPECT_GE(run.score.inlierRatio(), 0.75);
 }
 
 TEST(DecoderQuality, SphereBeforeWallHasFewOutliers)
