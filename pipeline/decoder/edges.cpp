@@ -20,7 +20,9 @@
 #include "pipeline/decoder/workspace.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstdint>
 
 namespace stria::pipeline {
 namespace {
@@ -41,6 +43,16 @@ constexpr float kMaxGradientError = 10.0f;
 // (R+ = G-B- + a common rise). Photo texture at contrast 0.3: inliers 42% ->
 // 85% (docs/algorithm.md, section 5).
 constexpr float kMaxCommonChange = 0.3f;
+
+// Per symbol code, the expected sign of each channel (eq. 6 needs them for
+// every error evaluated; the code's base-3 digits are slow to take apart).
+constexpr auto kSymbolSigns = [] {
+    std::array<std::array<std::int8_t, 3>, kSymbolCount> signs{};
+    for (int s = 0; s < kSymbolCount; ++s)
+        for (int ch = 0; ch < 3; ++ch) signs[s][ch] = static_cast<std::int8_t>(symbolChannel(static_cast<SymbolCode>(s), ch));
+    return signs;
+}();
+
 }  // namespace
 
 EqualizedChange equalizedChange(const DecoderWorkspace& ws, int from, int to)
@@ -62,10 +74,11 @@ EqualizedChange equalizedChange(const DecoderWorkspace& ws, int from, int to)
 
 float matchError(const std::array<float, 3>& c, SymbolCode symbol, float t)
 {
+    const std::array<std::int8_t, 3>& signs = kSymbolSigns[symbol];
+    const float onScale = 1 / (1 - t), offScale = 1 / t;
     float sum = 0;
     for (int ch = 0; ch < 3; ++ch) {
-        const int s = symbolChannel(symbol, ch);
-        const float e = s < 0 ? (1 + c[ch]) / (1 - t) : s > 0 ? (1 - c[ch]) / (1 - t) : std::abs(c[ch]) / t;
+        const float e = signs[ch] == 0 ? std::abs(c[ch]) * offScale : (1 - signs[ch] * c[ch]) * onScale;
         sum += e * e;
     }
     return std::sqrt(sum);
@@ -76,23 +89,21 @@ float symbolError(const std::array<float, 3>& c, SymbolCode symbol, float t)
     // The common change, estimated from the channels the symbol keeps
     // constant, else as the midpoint of the rising and the falling ones; a
     // symbol that moves every channel the same way leaves none to estimate.
+    const std::array<std::int8_t, 3>& signs = kSymbolSigns[symbol];
     float sum[3] = {0, 0, 0};  // channels expected falling, constant, rising
     int count[3] = {0, 0, 0};
     for (int ch = 0; ch < 3; ++ch) {
-        const int s = symbolChannel(symbol, ch) + 1;
-        sum[s] += c[ch];
-        ++count[s];
+        sum[signs[ch] + 1] += c[ch];
+        ++count[signs[ch] + 1];
     }
     float common = 0;
-    if (count[1] > 0) common = sum[1] / count[1];
-    else if (count[0] > 0 && count[2] > 0) common = 0.5f * (sum[0] / count[0] + sum[2] / count[2]);
+    if (count[1] > 0) common = sum[1] / static_cast<float>(count[1]);
+    else if (count[0] > 0 && count[2] > 0)
+        common = 0.5f * (sum[0] / static_cast<float>(count[0]) + sum[2] / static_cast<float>(count[2]));
     common = std::clamp(common, -kMaxCommonChange, kMaxCommonChange);
-    std::array<float, 3> corrected = c;
-    float norm = 0;
-    for (float& v : corrected) {
-        v -= common;
-        norm = std::max(norm, std::abs(v));
-    }
+    if (common == 0) return matchError(c, symbol, t);
+    std::array<float, 3> corrected{c[0] - common, c[1] - common, c[2] - common};
+    const float norm = std::max({std::abs(corrected[0]), std::abs(corrected[1]), std::abs(corrected[2])});
     if (norm > 0)
         for (float& v : corrected) v /= norm;
     return matchError(corrected, symbol, t);

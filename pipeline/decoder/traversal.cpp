@@ -30,6 +30,9 @@ namespace {
 // confirm it (see rejectContradictedRegions).
 constexpr int kContradictionRatio = 2;
 
+// Links between decoded regions across the stripes (markLinks).
+constexpr std::int32_t kNoLink = 0, kSameStripe = 1, kConfirmedLink = 2;
+
 // A null edge's error adds its border's mean gradient (per pixel pair, summed
 // over channels) relative to the reference edge's weight, times this: the
 // paper's gradient term (eq. 8) for edges that should show no change. Two
@@ -88,6 +91,7 @@ public:
             propagate();
             ++ws_.passCount;
         }
+        markLinks();
         rejectContradictedRegions();
         rejectShortRuns();
         rejectSmallComponents();
@@ -96,7 +100,11 @@ public:
 private:
     float edgeError(int from, int to, const GraphEdge& edge, SymbolCode symbol, float* positionError) const
     {
-        const EqualizedChange change = equalizedChange(ws_, from, to);
+        return edgeError(equalizedChange(ws_, from, to), edge, symbol, positionError);
+    }
+
+    float edgeError(const EqualizedChange& change, const GraphEdge& edge, SymbolCode symbol, float* positionError) const
+    {
         const float match = symbolError(change.c, symbol, t_);
         if (positionError) *positionError = beta_ * match / std::max(change.weight, 1.0f) + edge.gradientError;
         return match + alpha_ * edge.gradientError;
@@ -134,6 +142,7 @@ private:
                     const int next = otherEnd(edge, endRegion);
                     if (ws_.regions[next].stripe >= 0 || std::find(path + begin, path + end, next) != path + end)
                         continue;
+                    const EqualizedChange change = equalizedChange(ws_, endRegion, next);
                     SymbolCode tried = kNullSymbol;  // each required symbol once per edge
                     for (int c = 0; c < count; ++c) {
                         const int stripeHere = ws_.candidates[c] + (left ? 0 : end - begin - 1);
@@ -142,7 +151,7 @@ private:
                         const SymbolCode needed = stripeSymbol(pattern, stripeHere, stripeNext);
                         if (needed == tried) continue;
                         tried = needed;
-                        const float error = edgeError(endRegion, next, edge, needed, nullptr);
+                        const float error = edgeError(change, edge, needed, nullptr);
                         if (error < bestError) {
                             bestError = error;
                             bestRegion = next;
@@ -291,6 +300,27 @@ private:
         }
     }
 
+    // Per edge across the stripes between decoded regions, in edgeOrder (free
+    // after seeding): kSameStripe, kConfirmedLink (consecutive stripes in the
+    // edge's direction whose symbol fits: error < tokenErrorLimit) or kNoLink.
+    // Both checks below read them; each error is evaluated once.
+    void markLinks()
+    {
+        const float limit = static_cast<float>(ws_.params.tokenErrorLimit);
+        std::int32_t* link = ws_.edgeOrder.get();
+        for (int e = 0; e < ws_.edgeCount; ++e) {
+            const GraphEdge& edge = ws_.edges[e];
+            link[e] = kNoLink;
+            const int sa = ws_.regions[edge.a].stripe, sb = ws_.regions[edge.b].stripe;
+            if (sa < 0 || sb < 0 || edge.direction == EdgeDirection::Parallel) continue;
+            const int step = edge.direction == EdgeDirection::Forward ? 1 : -1;  // b = a + step if consecutive
+            if (sb == sa) link[e] = kSameStripe;
+            else if (sb == sa + step &&
+                     edgeError(edge.a, edge.b, edge, stripeSymbol(ws_.pattern, sa, sb), nullptr) < limit)
+                link[e] = kConfirmedLink;
+        }
+    }
+
     // A region decoded across a depth discontinuity by one edge that matched
     // by chance has the pattern contradicted by its other edges across the
     // stripes: weighed by border length, those that do not fit its stripe
@@ -304,6 +334,7 @@ private:
     {
         const StripePattern& pattern = ws_.pattern;
         const float limit = static_cast<float>(ws_.params.tokenErrorLimit);
+        const std::int32_t* link = ws_.edgeOrder.get();
         std::int32_t* reject = ws_.componentSize.get();  // flags, before the component sizes are counted
         for (int v = 0; v < ws_.regionCount; ++v) {
             reject[v] = 0;
@@ -312,7 +343,8 @@ private:
             int support = 0, contradiction = 0;
             const float weakEdge = static_cast<float>(ws_.params.nullEdgeRatio) * maxChannelRange(r);
             for (int i = 0; i < r.degree; ++i) {
-                const GraphEdge& edge = ws_.edges[ws_.adjacency[r.adjacencyBegin + i]];
+                const int edgeIndex = ws_.adjacency[r.adjacencyBegin + i];
+                const GraphEdge& edge = ws_.edges[edgeIndex];
                 const EdgeDirection dir = directionFrom(edge, v);
                 const int w = otherEnd(edge, v);
                 const int neighbour = ws_.regions[w].stripe;
@@ -326,7 +358,8 @@ private:
                 const int expected = r.stripe + (dir == EdgeDirection::Forward ? 1 : -1);
                 if (neighbour == r.stripe) continue;  // a null edge within the stripe
                 bool fits = false;
-                if (expected >= 0 && expected < pattern.stripeCount() && (neighbour < 0 || neighbour == expected))
+                if (neighbour == expected) fits = link[edgeIndex] == kConfirmedLink;
+                else if (neighbour < 0 && expected >= 0 && expected < pattern.stripeCount())
                     fits = edgeError(v, w, edge, stripeSymbol(pattern, r.stripe, expected), nullptr) < limit;
                 if (fits) support += edge.borderCount;
                 else if (neighbour >= 0 || edge.weight >= weakEdge)
@@ -354,29 +387,19 @@ private:
     {
         const StripePattern& pattern = ws_.pattern;
         const int window = pattern.window();
-        const float limit = static_cast<float>(ws_.params.tokenErrorLimit);
         std::int32_t* runs = ws_.componentSize.get();  // left run in the low, right run in the high 16 bits
         for (int v = 0; v < ws_.regionCount; ++v) runs[v] = 0;
         auto left = [&](int v) { return runs[v] & 0xffff; };
         auto right = [&](int v) { return runs[v] >> 16; };
-        // Confirmed links, evaluated once: flag per edge in edgeOrder (free after seeding).
         std::int32_t* link = ws_.edgeOrder.get();
-        for (int e = 0; e < ws_.edgeCount; ++e) {
-            const GraphEdge& edge = ws_.edges[e];
-            link[e] = 0;
-            const int sa = ws_.regions[edge.a].stripe, sb = ws_.regions[edge.b].stripe;
-            if (sa < 0 || sb < 0 || edge.direction == EdgeDirection::Parallel) continue;
-            const int step = edge.direction == EdgeDirection::Forward ? 1 : -1;  // b = a + step if consecutive
-            if (sb == sa) link[e] = 1;  // same stripe: passes the run through
-            else if (sb == sa + step && edgeError(edge.a, edge.b, edge, stripeSymbol(pattern, sa, sb), nullptr) < limit)
-                link[e] = 2;
-        }
+        for (int e = 0; e < ws_.edgeCount; ++e)  // links to regions undecoded since markLinks() are gone
+            if (ws_.regions[ws_.edges[e].a].stripe < 0 || ws_.regions[ws_.edges[e].b].stripe < 0) link[e] = kNoLink;
         for (int sweep = 0; sweep < 2 * window + 2; ++sweep) {
             bool changed = false;
             for (int e = 0; e < ws_.edgeCount; ++e) {
-                if (!link[e]) continue;
+                if (link[e] == kNoLink) continue;
                 const GraphEdge& edge = ws_.edges[e];
-                const int add = link[e] == 2 ? 1 : 0;
+                const int add = link[e] == kConfirmedLink ? 1 : 0;
                 // lo = the region on the left (lower stripe side), hi = on the right.
                 const bool aLeft = edge.direction == EdgeDirection::Forward;
                 const int lo = aLeft ? edge.a : edge.b, hi = aLeft ? edge.b : edge.a;
