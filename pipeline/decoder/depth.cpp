@@ -65,7 +65,10 @@ void computePoints(DecoderWorkspace& ws)
                     peakValue = g;
                 }
             }
-            if (!(peakValue > 0)) continue;
+            // The peak must lie inside the search window with its whole
+            // centroid window in the image: an edge whose profile the image
+            // border cuts off cannot be located.
+            if (!(peakValue > 0) || peak - kSearchRadius < 0 || peak + kSearchRadius > w - 2) continue;
             // Centroid of the peak's samples above a quarter of its height:
             // averages the noise over ~3 samples, and the threshold keeps the
             // tails of the neighbouring stripe edges out.
