@@ -17,7 +17,22 @@ void channelHistogramsReference(const std::uint8_t* row, int width, const std::a
 void channelHistograms(const std::uint8_t* row, int width, const std::array<int, 3>& rgbOffset,
                        std::array<ValueHistogram, 3>& histogram)
 {
-    channelHistogramsReference(row, width, rgbOffset, histogram);
+    int x = 0;
+#if defined(__ARM_NEON)
+    // vld3 de-interleaves 16 pixels into byte planes; the counting itself
+    // stays scalar (a histogram has no vector form), but from unit-stride
+    // planes without per-pixel offset arithmetic.
+    std::array<ValueHistogram*, 3> byByte;
+    for (int c = 0; c < 3; ++c) byByte[rgbOffset[c]] = &histogram[c];
+    alignas(16) std::uint8_t planes[3][16];
+    for (; x + 16 <= width; x += 16) {
+        const uint8x16x3_t v = vld3q_u8(row + 3 * x);
+        for (int k = 0; k < 3; ++k) vst1q_u8(planes[k], v.val[k]);
+        for (int k = 0; k < 3; ++k)
+            for (int i = 0; i < 16; ++i) ++(*byByte[k])[planes[k][i]];
+    }
+#endif
+    channelHistogramsReference(row + 3 * x, width - x, rgbOffset, histogram);
 }
 
 void scatterLabelsByValueReference(const std::uint8_t* values, const std::int32_t* labels, int width,
@@ -29,7 +44,18 @@ void scatterLabelsByValueReference(const std::uint8_t* values, const std::int32_
 void scatterLabelsByValue(const std::uint8_t* values, const std::int32_t* labels, int width, std::int32_t* cursor,
                           std::int32_t* out)
 {
-    scatterLabelsByValueReference(values, labels, width, cursor, out);
+    int x = 0;
+#if defined(__ARM_NEON)
+    // vld3 picks the channel's 16 values (plane 0 of the de-interleaved
+    // bytes from `values`); its 48 bytes end at values[3 * x + 47], within
+    // the row while x + 17 <= width. The scatter stays scalar.
+    alignas(16) std::uint8_t plane[16];
+    for (; x + 17 <= width; x += 16) {
+        vst1q_u8(plane, vld3q_u8(values + 3 * x).val[0]);
+        for (int i = 0; i < 16; ++i) out[cursor[plane[i]]++] = labels[x + i];
+    }
+#endif
+    scatterLabelsByValueReference(values + 3 * x, labels + x, width - x, cursor, out);
 }
 
 }  // namespace stria::pipeline

@@ -29,7 +29,8 @@ namespace stria::pipeline {
 std::size_t queueScratchEntries(std::size_t pixels)
 {
     // Every level's chain has at most one partly filled block.
-    return (pixels / (kQueueBlock - 1) + 257) * kQueueBlock;
+    // (+1 block: the prefetch reads kAhead entries past a position.)
+    return (pixels / (kQueueBlock - 1) + 258) * kQueueBlock;
 }
 
 void computeWatershed(DecoderWorkspace& ws)
@@ -39,7 +40,7 @@ void computeWatershed(DecoderWorkspace& ws)
     std::int32_t* label = ws.labels.get();
     std::int32_t* order = ws.pixelOrder;
     std::int32_t* blocks = ws.scratch.get();
-    constexpr int kLink = kQueueBlock - 1;
+    constexpr int kLink = kQueueBlock - 1, kAhead = 8;
     constexpr std::int32_t kBorder = -2, kPixel = 0x7fffffff;
 
     // Level histogram in four interleaved copies: most pixels share level 0,
@@ -87,6 +88,14 @@ void computeWatershed(DecoderWorkspace& ws)
                 hd = blocks[hd];
                 continue;
             }
+            // Prefetch the labels around the pixel kAhead entries on: the
+            // flood wanders over the image and its reads miss the caches.
+            // The entry there may be stale (past the tail or a link): it is
+            // only a hint, clamped into the image.
+            const std::int32_t ahead = std::min(blocks[hd + kAhead] & kPixel, n - 1);
+            __builtin_prefetch(label + std::max(ahead - w, 0));
+            __builtin_prefetch(label + ahead);
+            __builtin_prefetch(label + std::min(ahead + w, n - 1));
             const std::int32_t entry = blocks[hd++];
             const std::int32_t p = entry & kPixel, l = label[p];
             auto visit = [&](std::int32_t q) {

@@ -2,7 +2,8 @@
 // gradient row (NEON on ARM, int16 lanes elsewhere) on random rows and
 // simulator frames, the block-queue watershed against the plain linked-list
 // flooding it replaced, label for label, and the counting-sort region colours
-// against the nth_element medians they replaced.
+// against the nth_element medians they replaced, with their row kernels
+// (NEON on ARM) against scalar references.
 #include "hal/sim/scene/scene.hpp"
 #include "pipeline/decoder/simd.hpp"
 #include "pipeline/decoder/workspace.hpp"
@@ -109,6 +110,53 @@ TEST(DecoderKernels, EdgeLocationGradientsEqualReferenceOnSimulatorFrame)
     const cv::Mat relief = renderFrame(hal::sim::SceneKind::TexturedRelief, hal::sim::Albedo::Photo, 4);
     ASSERT_FALSE(relief.empty());
     EXPECT_EQ(projectedGradientsDiffering(relief, crosstalk.inv(), rng), 0);
+}
+
+// Rows whose region statistics kernels (channel histograms, labels scattered
+// by value) differ from the references, over both byte orders.
+int regionKernelRowsDiffering(const cv::Mat& frame, unsigned seed)
+{
+    const int w = frame.cols;
+    std::mt19937 rng(seed);
+    std::vector<std::int32_t> labels(w);
+    int differing = 0;
+    for (const std::array<int, 3> rgbOffset : {std::array<int, 3>{2, 1, 0}, std::array<int, 3>{0, 1, 2}})
+        for (int y = 0; y < frame.rows; ++y) {
+            for (std::int32_t& l : labels) l = static_cast<std::int32_t>(rng() % 5000);
+            std::array<ValueHistogram, 3> fast{}, reference{};
+            channelHistograms(frame.ptr(y), w, rgbOffset, fast);
+            channelHistogramsReference(frame.ptr(y), w, rgbOffset, reference);
+            differing += fast != reference;
+            for (int c = 0; c < 3; ++c) {
+                // Cursors from the row's own histogram, so every slot is written.
+                std::array<std::int32_t, 256> cursor, refCursor;
+                std::int32_t sum = 0;
+                for (int v = 0; v < 256; ++v) {
+                    cursor[v] = refCursor[v] = sum;
+                    sum += reference[c][v];
+                }
+                std::vector<std::int32_t> out(w, -1), refOut(w, -1);
+                const std::uint8_t* values = frame.ptr(y) + rgbOffset[c];
+                scatterLabelsByValue(values, labels.data(), w, cursor.data(), out.data());
+                scatterLabelsByValueReference(values, labels.data(), w, refCursor.data(), refOut.data());
+                differing += out != refOut || cursor != refCursor;
+            }
+        }
+    return differing;
+}
+
+TEST(DecoderKernels, RegionStatisticsKernelsMatchReferenceOnRandomRowsOfEveryWidth)
+{
+    // Widths around the 16-pixel NEON block (the scatter's needs one pixel more).
+    for (int width : {1, 2, 15, 16, 17, 18, 31, 32, 33, 34, 781})
+        EXPECT_EQ(regionKernelRowsDiffering(randomFrame(width, 4, 100u + width), 7u), 0) << "width " << width;
+}
+
+TEST(DecoderKernels, RegionStatisticsKernelsMatchReferenceOnSimulatorFrame)
+{
+    const cv::Mat frame = renderFrame(hal::sim::SceneKind::TexturedRelief, hal::sim::Albedo::Photo, 4);
+    ASSERT_FALSE(frame.empty());
+    EXPECT_EQ(regionKernelRowsDiffering(frame, 8u), 0);
 }
 
 // The watershed as first written: one FIFO per level linked through the
