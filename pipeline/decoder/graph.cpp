@@ -47,12 +47,10 @@ void buildGraph(DecoderWorkspace& ws)
     // Adds border pair (p, q); q is right of p (horizontal) or below it.
     auto addPair = [&](int x, int y, bool horizontal) {
         const std::int32_t p = y * w + x, q = horizontal ? p + 1 : p + w;
-        std::int32_t a = label[p], b = label[q];
-        int sign = 1;  // +1: the normal from a to b points to +x / +y
-        if (a > b) {
-            std::swap(a, b);
-            sign = -1;
-        }
+        // Without a branch: which side has the smaller label is unpredictable.
+        const std::int32_t lp = label[p], lq = label[q];
+        const std::int32_t a = std::min(lp, lq), b = std::max(lp, lq);
+        const int sign = lp < lq ? 1 : -1;  // +1: the normal from a to b points to +x / +y
         const std::int32_t e = findOrAddEdge(ws, a, b);
         if (e < 0) return;
         GraphEdge& edge = ws.edges[e];

@@ -3,7 +3,8 @@
 // simulator frames, the block-queue watershed against the plain linked-list
 // flooding it replaced, label for label, and the counting-sort region colours
 // against the nth_element medians they replaced, with their row kernels
-// (NEON on ARM) against scalar references.
+// (NEON on ARM) against scalar references, and the region graph against a
+// map-based construction.
 #include "hal/sim/scene/scene.hpp"
 #include "pipeline/decoder/simd.hpp"
 #include "pipeline/decoder/workspace.hpp"
@@ -12,6 +13,8 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
+#include <map>
 #include <random>
 #include <vector>
 
@@ -244,6 +247,60 @@ std::vector<Region> referenceRegionColours(const DecoderWorkspace& ws)
     return regions;
 }
 
+// The region adjacency graph by a map from label pairs to edges, pairs in
+// the same raster order (so edge indices and float sums agree), gradients
+// as first written.
+std::vector<GraphEdge> referenceGraph(const DecoderWorkspace& ws)
+{
+    const int w = ws.width, h = ws.height;
+    const float px = ws.primary[0], py = ws.primary[1];
+    std::map<std::pair<std::int32_t, std::int32_t>, std::size_t> index;
+    std::vector<GraphEdge> edges;
+    auto addPair = [&](int x, int y, bool horizontal) {
+        const std::int32_t p = y * w + x, q = horizontal ? p + 1 : p + w;
+        const std::int32_t a = std::min(ws.labels[p], ws.labels[q]), b = std::max(ws.labels[p], ws.labels[q]);
+        const int sign = ws.labels[p] < ws.labels[q] ? 1 : -1;
+        auto [it, added] = index.emplace(std::make_pair(a, b), edges.size());
+        if (added) {
+            edges.emplace_back();
+            edges.back().a = a;
+            edges.back().b = b;
+        }
+        GraphEdge& edge = edges[it->second];
+        ++edge.borderCount;
+        (horizontal ? edge.normalX : edge.normalY) += static_cast<std::int16_t>(sign);
+        const std::uint8_t* r0 = ws.frame.row(y);
+        float dp = 0, ds = 0;
+        for (int c = 0; c < 3; ++c) {
+            float gx, gy;
+            if (horizontal) {
+                const std::uint8_t* up = ws.frame.row(std::max(y - 1, 0));
+                const std::uint8_t* down = ws.frame.row(std::min(y + 1, h - 1));
+                gx = static_cast<float>(r0[3 * (x + 1) + c] - r0[3 * x + c]);
+                gy = 0.25f * static_cast<float>(down[3 * x + c] - up[3 * x + c] + down[3 * (x + 1) + c] -
+                                                up[3 * (x + 1) + c]);
+            } else {
+                const std::uint8_t* r1 = ws.frame.row(y + 1);
+                const int xl = 3 * std::max(x - 1, 0) + c, xr = 3 * std::min(x + 1, w - 1) + c;
+                gy = static_cast<float>(r1[3 * x + c] - r0[3 * x + c]);
+                gx = 0.25f * static_cast<float>(r0[xr] - r0[xl] + r1[xr] - r1[xl]);
+            }
+            dp += std::abs(gx * px + gy * py);
+            ds += std::abs(-gx * py + gy * px);
+        }
+        edge.primaryGradient += dp;
+        edge.secondaryGradient += ds;
+    };
+    for (int y = 0; y < h; ++y) {
+        for (int x = 0; x + 1 < w; ++x)
+            if (ws.labels[y * w + x] != ws.labels[y * w + x + 1]) addPair(x, y, true);
+        if (y + 1 < h)
+            for (int x = 0; x < w; ++x)
+                if (ws.labels[y * w + x] != ws.labels[(y + 1) * w + x]) addPair(x, y, false);
+    }
+    return edges;
+}
+
 // A workspace with just the buffers of the gradient and watershed stages,
 // sized as Decoder::create() sizes them.
 struct FloodCase {
@@ -261,6 +318,10 @@ struct FloodCase {
         ws.scratch = std::make_unique<std::int32_t[]>(
             std::max({queueScratchEntries(n), regionScratchEntries(maxRegions), 6 * n / image.rows}));
         ws.regions = std::make_unique<Region[]>(maxRegions);
+        ws.maxEdges = 3 * maxRegions;
+        ws.edges = std::make_unique<GraphEdge[]>(ws.maxEdges);
+        ws.adjacency = std::make_unique<std::int32_t[]>(2 * static_cast<std::size_t>(ws.maxEdges));
+        ws.primary = cv::Vec2f(0.8f, -0.6f);
         ws.colorCorrection = cv::Matx33f(0.9f, 0.08f, 0.02f, 0.1f, 0.8f, 0.1f, 0.03f, 0.12f, 0.85f).inv();
         ws.frame = {image.data, image.cols, image.rows, static_cast<std::ptrdiff_t>(image.step), PixelFormat::Bgr8};
     }
@@ -290,12 +351,40 @@ struct FloodCase {
         }
         return differing;
     }
+    // Graph edges that differ from the reference's (any field, floats
+    // bitwise), plus incidence lists that do not list each region's edges
+    // in increasing order; after the regions stage ran.
+    int differingGraphEdges()
+    {
+        buildGraph(ws);
+        const std::vector<GraphEdge> reference = referenceGraph(ws);
+        int differing = std::abs(ws.edgeCount - static_cast<int>(reference.size()));
+        for (int e = 0; e < std::min<int>(ws.edgeCount, static_cast<int>(reference.size())); ++e) {
+            const GraphEdge& a = ws.edges[e];
+            const GraphEdge& b = reference[e];
+            differing += a.a != b.a || a.b != b.b || a.borderCount != b.borderCount || a.normalX != b.normalX ||
+                         a.normalY != b.normalY || a.primaryGradient != b.primaryGradient ||
+                         a.secondaryGradient != b.secondaryGradient;
+        }
+        std::vector<std::vector<std::int32_t>> incident(ws.regionCount);
+        for (int e = 0; e < static_cast<int>(reference.size()); ++e) {
+            incident[reference[e].a].push_back(e);
+            incident[reference[e].b].push_back(e);
+        }
+        for (int r = 0; r < ws.regionCount; ++r) {
+            const Region& region = ws.regions[r];
+            differing += std::vector<std::int32_t>(ws.adjacency.get() + region.adjacencyBegin,
+                                                   ws.adjacency.get() + region.adjacencyBegin + region.degree) !=
+                         incident[r];
+        }
+        return differing;
+    }
     cv::Mat frame;
     DecoderWorkspace ws;
     int referenceRegions = -1;
 };
 
-TEST(DecoderKernels, WatershedLabelsAndRegionColoursMatchReferencesOnSimulatorFrame)
+TEST(DecoderKernels, WatershedRegionsAndGraphMatchReferencesOnSimulatorFrame)
 {
     const cv::Mat frame = renderFrame(hal::sim::SceneKind::TexturedRelief, hal::sim::Albedo::Photo, 4);
     ASSERT_FALSE(frame.empty());
@@ -305,9 +394,11 @@ TEST(DecoderKernels, WatershedLabelsAndRegionColoursMatchReferencesOnSimulatorFr
     EXPECT_GT(c.ws.regionCount, 1000);  // thousands of basins flooded at once
     EXPECT_FALSE(c.ws.truncated);
     EXPECT_EQ(c.differingRegions(), 0);
+    EXPECT_EQ(c.differingGraphEdges(), 0);
+    EXPECT_GT(c.ws.edgeCount, 2 * c.ws.regionCount);  // a planar graph of mostly hexagon-like cells
 }
 
-TEST(DecoderKernels, WatershedLabelsAndRegionColoursMatchReferencesOnNoiseAndWhenTruncated)
+TEST(DecoderKernels, WatershedRegionsAndGraphMatchReferencesOnNoiseAndWhenTruncated)
 {
     // Random bytes: the most irregular basins and queue traffic.
     const cv::Mat noise = randomFrame(97, 61, 11);
@@ -321,7 +412,9 @@ TEST(DecoderKernels, WatershedLabelsAndRegionColoursMatchReferencesOnNoiseAndWhe
     EXPECT_TRUE(truncated.ws.truncated);
     // Regions of one pixel up to large flooded ones, both byte orders.
     EXPECT_EQ(full.differingRegions(), 0);
+    EXPECT_EQ(full.differingGraphEdges(), 0);
     EXPECT_EQ(truncated.differingRegions(), 0);
+    EXPECT_EQ(truncated.differingGraphEdges(), 0);
     truncated.ws.rgbOffset = {0, 1, 2};
     EXPECT_EQ(truncated.differingRegions(), 0);
 }
