@@ -31,10 +31,6 @@ namespace {
 // the divisor is held at this floor so that noise in dark channels is not
 // blown up to +-1 (8, 12, 40 measured: fewer inliers on the relief scenes).
 constexpr float kMinBrightness = 20.0f;
-// Fig. 5: the border's chord must be within 45 degrees of the stripe edges'
-// direction (normal within 45 degrees of the primary direction) to count as
-// crossing the stripes.
-constexpr float kCos45 = 0.70710678f;
 constexpr float kMaxGradientError = 10.0f;
 // A texture edge changes all channels of the returned light by the same
 // factor: in the equalised change it adds a common offset to the stripe
@@ -121,18 +117,22 @@ void computeEdgeFeatures(DecoderWorkspace& ws)
     Region* regions = ws.regions.get();
     for (int e = 0; e < ws.edgeCount; ++e) {
         GraphEdge& edge = ws.edges[e];
-        // Direction: the border's normal (from a to b); if the border is
-        // closed or ragged (its chord is short) the centroids decide instead.
+        // Direction (fig. 5): the border's normal (from a to b); if the
+        // border is closed or ragged (its chord is short) the centroids decide
+        // instead. Across the stripes if it is within 45 degrees of the
+        // primary direction (the border within 45 degrees of the stripes).
         float nx = static_cast<float>(edge.normalX), ny = static_cast<float>(edge.normalY);
-        if (std::hypot(nx, ny) < 0.25f * static_cast<float>(edge.borderCount)) {
+        const float count = static_cast<float>(edge.borderCount);
+        if (nx * nx + ny * ny < 0.0625f * count * count) {  // chord < border length / 4
             nx = regions[edge.b].centroidX - regions[edge.a].centroidX;
             ny = regions[edge.b].centroidY - regions[edge.a].centroidY;
         }
-        const float length = std::hypot(nx, ny);
-        const float along = length > 0 ? (nx * ws.primary[0] + ny * ws.primary[1]) / length : 0.0f;
-        edge.direction = along >= kCos45    ? EdgeDirection::Forward
-                         : along <= -kCos45 ? EdgeDirection::Backward
-                                            : EdgeDirection::Parallel;
+        // Within 45 degrees of the primary direction: |along| / length >= cos 45.
+        const float length2 = nx * nx + ny * ny;
+        const float along = nx * ws.primary[0] + ny * ws.primary[1];
+        edge.direction = length2 == 0 || 2 * along * along < length2 ? EdgeDirection::Parallel
+                         : along > 0                                 ? EdgeDirection::Forward
+                                                                     : EdgeDirection::Backward;
     }
     for (int e = 0; e < ws.edgeCount; ++e) {
         const GraphEdge& edge = ws.edges[e];
