@@ -34,11 +34,14 @@ constexpr float kMinBrightness = 20.0f;
 constexpr float kMaxGradientError = 10.0f;
 // A texture edge changes all channels of the returned light by the same
 // factor: in the equalised change it adds a common offset to the stripe
-// symbol. Up to this share of the largest channel change it is removed before
-// the symbol is matched (symbolError); at half the symbols become ambiguous
-// (R+ = G-B- + a common rise). Photo texture at contrast 0.3: inliers 42% ->
-// 85% (docs/algorithm.md, section 5).
-constexpr float kMaxCommonChange = 0.3f;
+// symbol, which symbolError removes before matching, up to this share of the
+// largest channel change (at half, symbols become ambiguous: R+ = G-B- + a
+// common rise) and up to this change of the brightness (the albedo step
+// between neighbouring superpixels a texture plausibly makes; at full contrast
+// the stripe step is large and little slack is given). Photo texture at
+// contrast 0.3: inliers 42% -> 86% (docs/algorithm.md, section 5).
+constexpr float kMaxCommonShare = 0.3f;
+constexpr float kMaxAlbedoChange = 0.15f;
 
 // Per symbol code, the expected sign of each channel (eq. 6 needs them for
 // every error evaluated; the code's base-3 digits are slow to take apart).
@@ -63,6 +66,7 @@ EqualizedChange equalizedChange(const DecoderWorkspace& ws, int from, int to)
         out.c[c] = raw / std::max(0.5f * (f.color[c] + t.color[c]), kMinBrightness);
         norm = std::max(norm, std::abs(out.c[c]));
     }
+    out.relative = norm;
     if (norm > 0)
         for (float& c : out.c) c /= norm;
     return out;
@@ -80,8 +84,9 @@ float matchError(const std::array<float, 3>& c, SymbolCode symbol, float t)
     return std::sqrt(sum);
 }
 
-float symbolError(const std::array<float, 3>& c, SymbolCode symbol, float t)
+float symbolError(const EqualizedChange& change, SymbolCode symbol, float t)
 {
+    const std::array<float, 3>& c = change.c;
     // The common change, estimated from the channels the symbol keeps
     // constant, else as the midpoint of the rising and the falling ones; a
     // symbol that moves every channel the same way leaves none to estimate.
@@ -96,7 +101,8 @@ float symbolError(const std::array<float, 3>& c, SymbolCode symbol, float t)
     if (count[1] > 0) common = sum[1] / static_cast<float>(count[1]);
     else if (count[0] > 0 && count[2] > 0)
         common = 0.5f * (sum[0] / static_cast<float>(count[0]) + sum[2] / static_cast<float>(count[2]));
-    common = std::clamp(common, -kMaxCommonChange, kMaxCommonChange);
+    const float bound = change.relative > 0 ? std::min(kMaxCommonShare, kMaxAlbedoChange / change.relative) : 0.0f;
+    common = std::clamp(common, -bound, bound);
     if (common == 0) return matchError(c, symbol, t);
     std::array<float, 3> corrected{c[0] - common, c[1] - common, c[2] - common};
     const float norm = std::max({std::abs(corrected[0]), std::abs(corrected[1]), std::abs(corrected[2])});
@@ -151,7 +157,7 @@ void computeEdgeFeatures(DecoderWorkspace& ws)
                                  ? std::min(edge.secondaryGradient / edge.primaryGradient, kMaxGradientError)
                                  : kMaxGradientError;
         edge.bestSymbol = optimalSymbol(change.c, t);
-        edge.bestError = symbolError(change.c, edge.bestSymbol, t) + alpha * edge.gradientError;
+        edge.bestError = symbolError(change, edge.bestSymbol, t) + alpha * edge.gradientError;
     }
 }
 

@@ -105,7 +105,7 @@ private:
 
     float edgeError(const EqualizedChange& change, const GraphEdge& edge, SymbolCode symbol, float* positionError) const
     {
-        const float match = symbolError(change.c, symbol, t_);
+        const float match = symbolError(change, symbol, t_);
         if (positionError) *positionError = beta_ * match / std::max(change.weight, 1.0f) + edge.gradientError;
         return match + alpha_ * edge.gradientError;
     }

@@ -132,12 +132,13 @@ void computePoints(DecoderWorkspace& ws);
 struct EqualizedChange {
     std::array<float, 3> c{};  // R G B, max |c| = 1
     float weight = 0;          // L-inf of the raw change
+    float relative = 0;        // L-inf of the brightness-relative change before normalising
 };
 EqualizedChange equalizedChange(const DecoderWorkspace& ws, int from, int to);
 float matchError(const std::array<float, 3>& c, SymbolCode symbol, float t);
 SymbolCode optimalSymbol(const std::array<float, 3>& c, float t);
 // matchError of `symbol` after removing the change common to all channels
 // that a texture edge adds, as far as it is plausible (edges.cpp).
-float symbolError(const std::array<float, 3>& c, SymbolCode symbol, float t);
+float symbolError(const EqualizedChange& change, SymbolCode symbol, float t);
 
 }  // namespace stria::pipeline
