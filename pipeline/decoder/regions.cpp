@@ -69,9 +69,11 @@ void computeRegions(DecoderWorkspace& ws)
             scatterLabelsByValue(ws.frame.row(y) + ws.rgbOffset[c], label + static_cast<std::ptrdiff_t>(y) * w, w,
                                  cursor.data(), byValue);
         for (int r = 0; r < count; ++r) remaining[r] = regions[r].pixelCount / 2 + 1;
-        for (int v = 0; v < 256; ++v)
+        for (int v = 0; v < 256; ++v) {
+#pragma GCC unroll 4
             for (int i = start[v]; i < start[v + 1]; ++i)
                 if (--remaining[byValue[i]] == 0) regions[byValue[i]].color[c] = static_cast<float>(v);
+        }
     }
 
     const cv::Matx33f& m = ws.colorCorrection;

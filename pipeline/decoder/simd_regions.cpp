@@ -14,6 +14,28 @@ void channelHistogramsReference(const std::uint8_t* row, int width, const std::a
         for (int c = 0; c < 3; ++c) ++histogram[c][row[3 * x + rgbOffset[c]]];
 }
 
+namespace {
+
+// The reference's loops with the offsets in registers and the counts known
+// not to alias the row (the reference reloads both after every increment).
+void channelHistogramsScalar(const std::uint8_t* row, int width, const std::array<int, 3>& rgbOffset,
+                             std::array<ValueHistogram, 3>& histogram)
+{
+    const std::uint8_t* __restrict r = row + rgbOffset[0];
+    const std::uint8_t* __restrict g = row + rgbOffset[1];
+    const std::uint8_t* __restrict b = row + rgbOffset[2];
+    std::int32_t* __restrict hr = histogram[0].data();
+    std::int32_t* __restrict hg = histogram[1].data();
+    std::int32_t* __restrict hb = histogram[2].data();
+    for (int x = 0; x < width; ++x) {
+        ++hr[r[3 * x]];
+        ++hg[g[3 * x]];
+        ++hb[b[3 * x]];
+    }
+}
+
+}  // namespace
+
 void channelHistograms(const std::uint8_t* row, int width, const std::array<int, 3>& rgbOffset,
                        std::array<ValueHistogram, 3>& histogram)
 {
@@ -32,7 +54,7 @@ void channelHistograms(const std::uint8_t* row, int width, const std::array<int,
             for (int i = 0; i < 16; ++i) ++(*byByte[k])[planes[k][i]];
     }
 #endif
-    channelHistogramsReference(row + 3 * x, width - x, rgbOffset, histogram);
+    channelHistogramsScalar(row + 3 * x, width - x, rgbOffset, histogram);
 }
 
 void scatterLabelsByValueReference(const std::uint8_t* values, const std::int32_t* labels, int width,
@@ -44,6 +66,7 @@ void scatterLabelsByValueReference(const std::uint8_t* values, const std::int32_
 void scatterLabelsByValue(const std::uint8_t* values, const std::int32_t* labels, int width, std::int32_t* cursor,
                           std::int32_t* out)
 {
+    // (__restrict: the stores to out may otherwise alias the cursors.)
     int x = 0;
 #if defined(__ARM_NEON)
     // vld3 picks the channel's 16 values (plane 0 of the de-interleaved
@@ -55,7 +78,12 @@ void scatterLabelsByValue(const std::uint8_t* values, const std::int32_t* labels
         for (int i = 0; i < 16; ++i) out[cursor[plane[i]]++] = labels[x + i];
     }
 #endif
-    scatterLabelsByValueReference(values + 3 * x, labels + x, width - x, cursor, out);
+    const std::uint8_t* __restrict v = values;
+    const std::int32_t* __restrict l = labels;
+    std::int32_t* __restrict c = cursor;
+    std::int32_t* __restrict o = out;
+#pragma GCC unroll 4
+    for (; x < width; ++x) o[c[v[3 * x]]++] = l[x];
 }
 
 }  // namespace stria::pipeline

@@ -55,6 +55,7 @@ void computeWatershed(DecoderWorkspace& ws)
     {
         std::array<std::int32_t, 256> fill;
         for (int l = 0; l < 256; ++l) fill[l] = start[l];
+#pragma GCC unroll 4
         for (int p = 0; p < n; ++p) order[fill[g[p]]++] = p;
     }
     // Unlabelled pixels hold -1, or kBorder on the image border; a queue
