@@ -72,7 +72,7 @@ TEST(DecoderQuality, LowContrastWithAmbientLight)
     s.contrast = 0.3;
     s.ambient = 0.2;
     const SceneRun run = decodeScene(hal::sim::desktopRig(), SceneKind::TexturedRelief, Albedo::Photo, s);
-    // Measured 85.5% inliers, 0.07% outliers (42.1% and 0.04% before the
+    // Measured 84.5% inliers, 0.05% outliers (42.1% and 0.04% before the
     // texture's common change was removed from the symbol match).
     EXPECT_GE(run.score.inlierRatio(), 0.75);
     EXPECT_LE(run.score.outlierRatio(), 0.001);
@@ -99,7 +99,7 @@ TEST(DecoderQuality, TiltedWhitePlaneIsPrecise)
 TEST(DecoderQuality, FanWithGapsHasFewOutliers)
 {
     const SceneRun run = decodeScene(hal::sim::desktopRig(), SceneKind::Fan, Albedo::Uniform, noise(2));
-    // TARGET NOT REACHED: the issue asks <= 0.2% outliers; measured 0.61%
+    // TARGET NOT REACHED: the issue asks <= 0.2% outliers; measured 0.59%
     // (strips of the wall between slats whose colours repeat the pattern next
     // to the slat's last stripe, decoded across the depth step; one of them,
     // 0.40% of the points, is an exact ambiguity of the pattern).
