@@ -102,7 +102,7 @@ TEST(DecoderQuality, FanWithGapsHasFewOutliers)
     // TARGET NOT REACHED: the issue asks <= 0.2% outliers; measured 0.59%
     // (strips of the wall between slats whose colours repeat the pattern next
     // to the slat's last stripe, decoded across the depth step; one of them,
-    // 0.40% of the points, is an exact ambiguity of the pattern).
+    // 0.37% of the points, is an exact ambiguity of the pattern).
     // This guards the measured level.
     EXPECT_LE(run.score.outlierRatio(), 0.007);
     EXPECT_GE(run.score.inlierRatio(), 0.75);
