@@ -66,7 +66,6 @@ void scatterLabelsByValueReference(const std::uint8_t* values, const std::int32_
 void scatterLabelsByValue(const std::uint8_t* values, const std::int32_t* labels, int width, std::int32_t* cursor,
                           std::int32_t* out)
 {
-    // (__restrict: the stores to out may otherwise alias the cursors.)
     int x = 0;
 #if defined(__ARM_NEON)
     // vld3 picks the channel's 16 values (plane 0 of the de-interleaved
@@ -78,6 +77,7 @@ void scatterLabelsByValue(const std::uint8_t* values, const std::int32_t* labels
         for (int i = 0; i < 16; ++i) out[cursor[plane[i]]++] = labels[x + i];
     }
 #endif
+    // __restrict: otherwise every store to out could change the cursors.
     const std::uint8_t* __restrict v = values;
     const std::int32_t* __restrict l = labels;
     std::int32_t* __restrict c = cursor;
