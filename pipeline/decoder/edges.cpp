@@ -5,6 +5,7 @@
 //   equalised   C = (C^ * Dinv) / |C^ * Dinv|_inf                        (eq. 4)
 //               Dinv per channel = 1 / the two regions' mean brightness
 //   symbols     per channel -1/0/+1 by threshold t, match error         (eq. 5-7)
+//               after removing a texture's common change (symbolError)
 //   gradient    E_gradient = sum |d/ds I| / sum |d/dp I| on the border  (eq. 8)
 //   error       E = E_match + alpha * E_gradient                         (eq. 9)
 //   direction   forward / backward / parallel to the primary direction  (fig. 5)
@@ -48,7 +49,8 @@ constexpr float kMaxAlbedoChange = 0.15f;
 constexpr auto kSymbolSigns = [] {
     std::array<std::array<std::int8_t, 3>, kSymbolCount> signs{};
     for (int s = 0; s < kSymbolCount; ++s)
-        for (int ch = 0; ch < 3; ++ch) signs[s][ch] = static_cast<std::int8_t>(symbolChannel(static_cast<SymbolCode>(s), ch));
+        for (int ch = 0; ch < 3; ++ch)
+            signs[s][ch] = static_cast<std::int8_t>(symbolChannel(static_cast<SymbolCode>(s), ch));
     return signs;
 }();
 
@@ -101,7 +103,8 @@ float symbolError(const EqualizedChange& change, SymbolCode symbol, float t)
     if (count[1] > 0) common = sum[1] / static_cast<float>(count[1]);
     else if (count[0] > 0 && count[2] > 0)
         common = 0.5f * (sum[0] / static_cast<float>(count[0]) + sum[2] / static_cast<float>(count[2]));
-    const float bound = change.relative > 0 ? std::min(kMaxCommonShare, kMaxAlbedoChange / change.relative) : 0.0f;
+    const float bound =
+        change.relative > 0 ? std::min(kMaxCommonShare, kMaxAlbedoChange / change.relative) : 0.0f;
     common = std::clamp(common, -bound, bound);
     if (common == 0) return matchError(c, symbol, t);
     std::array<float, 3> corrected{c[0] - common, c[1] - common, c[2] - common};

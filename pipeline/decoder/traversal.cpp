@@ -7,12 +7,13 @@
 //     symbol some candidate needs there); candidates needing another symbol
 //     drop out, until one remains (at the latest after window() edges).
 //  2. Best-first propagation from the path's regions with a heap keyed by edge
-//     error. A neighbour is a stripe further (forward/backward edge, expected
-//     pattern symbol, possibly not the optimal one) or, along the stripes, the
-//     same stripe (null edge, fig. 6: weak parallel edge, and the virtual edge
-//     from the reference region has the same symbol). Edges above A pass only on a token from the
-//     bucket, which good edges refill. A region reached again with another
-//     stripe keeps the one with the lower position error Q (eq. 10).
+//     error. A neighbour is a stripe further (forward/backward edge that is
+//     not weak, expected pattern symbol, possibly not the optimal one) or,
+//     along the stripes, the same stripe (null edge, fig. 6: weak parallel
+//     edge, and the virtual edge from the reference region has the same
+//     symbol). Edges above A pass only on a token from the bucket, which good
+//     edges refill. A region reached again with another stripe keeps the one
+//     with the lower position error Q (eq. 10).
 // Afterwards three checks drop false positives: regions whose edges across the
 // stripes mostly contradict their stripe, regions without window() confirmed
 // stripe edges around them (the window property, locally; a black stripe,
