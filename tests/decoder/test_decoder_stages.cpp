@@ -43,6 +43,30 @@ TEST(DecoderEquations, OptimalSymbolThresholdsAtT)
     EXPECT_EQ(optimalSymbol({-0.34f, 1, 0.33f}, t), makeSymbol(-1, 1, 0));
 }
 
+TEST(DecoderEquations, SymbolErrorRemovesATexturesCommonChangeWithinBounds)
+{
+    const float t = 1.0f / 3.0f;
+    // A stripe edge R+G- (relative steps +-0.25) on a texture 5% brighter on
+    // the far side: (0.30, -0.20, 0.05), i.e. (1, -2/3, 1/6) normalised. The
+    // constant blue channel shows the common change, which is removed.
+    const EqualizedChange rising{{1, -2.0f / 3, 1.0f / 6}, 10, 0.3f};
+    EXPECT_NEAR(matchError(rising.c, makeSymbol(1, -1, 0), t), std::sqrt(0.5f), 1e-5);
+    EXPECT_NEAR(symbolError(rising, makeSymbol(1, -1, 0), t), 0.0f, 1e-5);
+    // R-G+B+ at contrast 0.3 (steps 0.29) on a texture 10% darker: no
+    // constant channel; the midpoint of the falling and rising ones.
+    const EqualizedChange darker{{-1, 0.19f / 0.39f, 0.19f / 0.39f}, 10, 0.39f};
+    EXPECT_GT(matchError(darker.c, makeSymbol(-1, 1, 1), t), 1.0f);
+    EXPECT_NEAR(symbolError(darker, makeSymbol(-1, 1, 1), t), 0.0f, 1e-5);
+    // R+ is G-B- plus a common rise of the whole step: beyond both bounds
+    // (0.3 of the largest change; a 15% brightness change at full contrast),
+    // so it does not fit, at low contrast or high.
+    for (float relative : {0.3f, 1.8f}) {
+        const EqualizedChange redRises{{1, 0, 0}, 10, relative};
+        EXPECT_FLOAT_EQ(symbolError(redRises, makeSymbol(1, 0, 0), t), 0.0f);
+        EXPECT_GT(symbolError(redRises, makeSymbol(0, -1, -1), t), 3.0f) << relative;
+    }
+}
+
 TEST(DecoderStages, CleanSlideGivesOneSuperpixelPerStripeAndEveryStripeDecoded)
 {
     SlideCase c;
