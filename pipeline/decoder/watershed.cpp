@@ -89,14 +89,18 @@ void computeWatershed(DecoderWorkspace& ws)
                 hd = blocks[hd];
                 continue;
             }
-            // Prefetch the labels around the pixel kAhead entries on: the
-            // flood wanders over the image and its reads miss the caches.
+            // Prefetch the labels and levels around the pixel kAhead entries
+            // on: the flood wanders over the image and its reads miss the
+            // caches (1388x1038: the stage took 44-47 ms without, 37-40 with
+            // the labels, 33-35 with the levels too, under load).
             // The entry there may be stale (past the tail or a link): it is
             // only a hint, clamped into the image.
             const std::int32_t ahead = std::min(blocks[hd + kAhead] & kPixel, n - 1);
             __builtin_prefetch(label + std::max(ahead - w, 0));
             __builtin_prefetch(label + ahead);
             __builtin_prefetch(label + std::min(ahead + w, n - 1));
+            __builtin_prefetch(g + std::max(ahead - w, 0));
+            __builtin_prefetch(g + std::min(ahead + w, n - 1));
             const std::int32_t entry = blocks[hd++];
             const std::int32_t p = entry & kPixel, l = label[p];
             auto visit = [&](std::int32_t q) {
