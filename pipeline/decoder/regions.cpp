@@ -33,9 +33,13 @@ void computeRegions(DecoderWorkspace& ws)
     const std::int32_t* label = ws.labels.get();
     Region* regions = ws.regions.get();
     for (int r = 0; r < count; ++r) regions[r] = Region{};
+    // Compact per-region arrays in the scratch (the Region records are 68
+    // bytes apart): coordinate sums, then a counter, first of pixels and
+    // then, per channel, of the pixels left before the median.
     auto* sums = reinterpret_cast<std::int64_t*>(ws.scratch.get());  // x, y per region
-    auto* remaining = reinterpret_cast<std::int32_t*>(sums + 2 * static_cast<std::ptrdiff_t>(count));
+    auto* counter = reinterpret_cast<std::int32_t*>(sums + 2 * static_cast<std::ptrdiff_t>(count));
     std::fill(sums, sums + 2 * static_cast<std::ptrdiff_t>(count), 0);
+    std::fill(counter, counter + count, 0);
 
     std::array<ValueHistogram, 3> histogram{};
     for (int y = 0; y < h; ++y) {
@@ -45,7 +49,7 @@ void computeRegions(DecoderWorkspace& ws)
             int end = x + 1;
             while (end < w && row[end] == r) ++end;
             const std::int64_t length = end - x;
-            regions[r].pixelCount += static_cast<std::int32_t>(length);
+            counter[r] += static_cast<std::int32_t>(length);
             sums[2 * r] += (x + end - 1) * length / 2;
             sums[2 * r + 1] += y * length;
             x = end;
@@ -53,7 +57,8 @@ void computeRegions(DecoderWorkspace& ws)
         channelHistograms(ws.frame.row(y), w, ws.rgbOffset, histogram);
     }
     for (int r = 0; r < count; ++r) {
-        const double size = regions[r].pixelCount;
+        regions[r].pixelCount = counter[r];
+        const double size = counter[r];
         regions[r].centroidX = static_cast<float>(static_cast<double>(sums[2 * r]) / size);
         regions[r].centroidY = static_cast<float>(static_cast<double>(sums[2 * r + 1]) / size);
     }
@@ -68,11 +73,11 @@ void computeRegions(DecoderWorkspace& ws)
         for (int y = 0; y < h; ++y)
             scatterLabelsByValue(ws.frame.row(y) + ws.rgbOffset[c], label + static_cast<std::ptrdiff_t>(y) * w, w,
                                  cursor.data(), byValue);
-        for (int r = 0; r < count; ++r) remaining[r] = regions[r].pixelCount / 2 + 1;
+        for (int r = 0; r < count; ++r) counter[r] = regions[r].pixelCount / 2 + 1;
         for (int v = 0; v < 256; ++v) {
 #pragma GCC unroll 4
             for (int i = start[v]; i < start[v + 1]; ++i)
-                if (--remaining[byValue[i]] == 0) regions[byValue[i]].color[c] = static_cast<float>(v);
+                if (--counter[byValue[i]] == 0) regions[byValue[i]].color[c] = static_cast<float>(v);
         }
     }
 
