@@ -114,9 +114,11 @@ Result<std::unique_ptr<Decoder>> Decoder::create(const StripePattern& pattern, c
     ws->pixelOrder = reinterpret_cast<std::int32_t*>(ws->orderAndPoints.get());
     ws->points = reinterpret_cast<ScanPoint*>(ws->orderAndPoints.get());
     // Scratch: the gradient kernel's row lanes (6 x width int32), the
-    // watershed queue, the region sums and counters.
-    ws->scratch = allocate<std::int32_t>(std::max({queueScratchEntries(n), regionScratchEntries(ws->maxRegions),
-                                                   6 * static_cast<std::size_t>(w)}), bytes);
+    // watershed queue, the region sums and counters, the graph's edge lists.
+    ws->scratch = allocate<std::int32_t>(
+        std::max({queueScratchEntries(n), regionScratchEntries(ws->maxRegions),
+                  graphScratchEntries(ws->maxRegions, ws->maxEdges), 6 * static_cast<std::size_t>(w)}),
+        bytes);
     ws->regions = allocate<Region>(ws->maxRegions, bytes);
     ws->edges = allocate<GraphEdge>(ws->maxEdges, bytes);
     ws->adjacency = allocate<std::int32_t>(2 * static_cast<std::size_t>(ws->maxEdges), bytes);

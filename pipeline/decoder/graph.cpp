@@ -14,28 +14,12 @@
 #include <cmath>
 
 namespace stria::pipeline {
-namespace {
 
-std::int32_t findOrAddEdge(DecoderWorkspace& ws, std::int32_t a, std::int32_t b)
+std::size_t graphScratchEntries(std::size_t regions, std::size_t edges)
 {
-    Region& ra = ws.regions[a];
-    for (std::int32_t e = ra.edgeListHead; e >= 0; e = ws.edges[e].nextOfA)
-        if (ws.edges[e].b == b) return e;
-    if (ws.edgeCount == ws.maxEdges) {
-        ws.truncated = true;
-        return -1;
-    }
-    const std::int32_t e = ws.edgeCount++;
-    GraphEdge& edge = ws.edges[e];
-    edge = GraphEdge{};
-    edge.a = a;
-    edge.b = b;
-    edge.nextOfA = ra.edgeListHead;
-    ra.edgeListHead = e;
-    return e;
+    // A list head per region; the next edge and the larger label per edge.
+    return regions + 2 * edges;
 }
-
-}  // namespace
 
 void buildGraph(DecoderWorkspace& ws)
 {
@@ -44,6 +28,31 @@ void buildGraph(DecoderWorkspace& ws)
     const float px = ws.primary[0], py = ws.primary[1];
     ws.edgeCount = 0;
 
+    // Per region the list of its edges to larger labels, in compact arrays
+    // in the scratch (the Region and GraphEdge records are 64 and 40 bytes
+    // apart): the walk touches 8 bytes per edge.
+    std::int32_t* head = ws.scratch.get();
+    std::int32_t* next = head + ws.regionCount;
+    std::int32_t* larger = next + ws.maxEdges;
+    std::fill(head, head + ws.regionCount, -1);
+    auto findOrAddEdge = [&](std::int32_t a, std::int32_t b) -> std::int32_t {
+        for (std::int32_t e = head[a]; e >= 0; e = next[e])
+            if (larger[e] == b) return e;
+        if (ws.edgeCount == ws.maxEdges) {
+            ws.truncated = true;
+            return -1;
+        }
+        const std::int32_t e = ws.edgeCount++;
+        GraphEdge& edge = ws.edges[e];
+        edge = GraphEdge{};
+        edge.a = a;
+        edge.b = b;
+        larger[e] = b;
+        next[e] = head[a];
+        head[a] = e;
+        return e;
+    };
+
     // Adds border pair (p, q); q is right of p (horizontal) or below it.
     auto addPair = [&](int x, int y, bool horizontal) {
         const std::int32_t p = y * w + x, q = horizontal ? p + 1 : p + w;
@@ -51,7 +60,7 @@ void buildGraph(DecoderWorkspace& ws)
         const std::int32_t lp = label[p], lq = label[q];
         const std::int32_t a = std::min(lp, lq), b = std::max(lp, lq);
         const int sign = lp < lq ? 1 : -1;  // +1: the normal from a to b points to +x / +y
-        const std::int32_t e = findOrAddEdge(ws, a, b);
+        const std::int32_t e = findOrAddEdge(a, b);
         if (e < 0) return;
         GraphEdge& edge = ws.edges[e];
         ++edge.borderCount;

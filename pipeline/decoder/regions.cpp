@@ -33,7 +33,7 @@ void computeRegions(DecoderWorkspace& ws)
     const std::int32_t* label = ws.labels.get();
     Region* regions = ws.regions.get();
     for (int r = 0; r < count; ++r) regions[r] = Region{};
-    // Compact per-region arrays in the scratch (the Region records are 68
+    // Compact per-region arrays in the scratch (the Region records are 64
     // bytes apart): coordinate sums, then a counter, first of pixels and
     // then, per channel, of the pixels left before the median.
     auto* sums = reinterpret_cast<std::int64_t*>(ws.scratch.get());  // x, y per region

@@ -26,7 +26,6 @@ struct Region {
     std::int32_t pixelCount = 0;
     std::int32_t adjacencyBegin = 0;  // incident edges: Workspace::adjacency[begin, begin + degree)
     std::int32_t degree = 0;
-    std::int32_t edgeListHead = -1;   // graph construction: edges whose smaller label is this one
     // Decoding state.
     std::int32_t stripe = -1;     // pattern stripe index, -1 = undecoded
     std::int32_t reference = -1;  // decoded neighbour across a real stripe edge (null-edge test, fig. 6)
@@ -50,7 +49,6 @@ struct GraphEdge {
     float bestError = 0;     // eq. 9 for the optimal symbol
     SymbolCode bestSymbol = kNullSymbol;  // eq. 7, seen from a to b
     EdgeDirection direction = EdgeDirection::Parallel;
-    std::int32_t nextOfA = -1;  // graph construction: next edge in a's list
 };
 
 // A pending visit in the best-first propagation: region `region` is stripe
@@ -83,7 +81,7 @@ struct DecoderWorkspace {
     std::unique_ptr<std::byte[]> orderAndPoints;
     std::int32_t* pixelOrder = nullptr;
     ScanPoint* points = nullptr;
-    std::unique_ptr<std::int32_t[]> scratch;  // gradient row lanes, watershed queue blocks, region sums
+    std::unique_ptr<std::int32_t[]> scratch;  // gradient row lanes, watershed queue blocks, region sums, edge lists
 
     // Graph.
     int maxRegions = 0, maxEdges = 0, maxPoints = 0;
@@ -116,8 +114,9 @@ struct DecoderWorkspace {
 // Watershed queue: entries per block, and the scratch entries it needs.
 constexpr int kQueueBlock = 16;  // one cache line
 std::size_t queueScratchEntries(std::size_t pixels);
-// Region statistics: the scratch entries they need.
+// Region statistics and graph construction: the scratch entries they need.
 std::size_t regionScratchEntries(std::size_t regions);
+std::size_t graphScratchEntries(std::size_t regions, std::size_t edges);
 
 // The stages, in order.
 void computeGradient(DecoderWorkspace& ws);

@@ -315,10 +315,11 @@ struct FloodCase {
         ws.labels = std::make_unique<std::int32_t[]>(n);
         ws.orderAndPoints = std::make_unique<std::byte[]>(4 * n);
         ws.pixelOrder = reinterpret_cast<std::int32_t*>(ws.orderAndPoints.get());
-        ws.scratch = std::make_unique<std::int32_t[]>(
-            std::max({queueScratchEntries(n), regionScratchEntries(maxRegions), 6 * n / image.rows}));
-        ws.regions = std::make_unique<Region[]>(maxRegions);
         ws.maxEdges = 3 * maxRegions;
+        ws.scratch = std::make_unique<std::int32_t[]>(
+            std::max({queueScratchEntries(n), regionScratchEntries(maxRegions),
+                      graphScratchEntries(maxRegions, ws.maxEdges), 6 * n / image.rows}));
+        ws.regions = std::make_unique<Region[]>(maxRegions);
         ws.edges = std::make_unique<GraphEdge[]>(ws.maxEdges);
         ws.adjacency = std::make_unique<std::int32_t[]>(2 * static_cast<std::size_t>(ws.maxEdges));
         ws.primary = cv::Vec2f(0.8f, -0.6f);
