@@ -205,18 +205,15 @@ private:
         return true;
     }
 
-    // The best way to reach `to` from decoded region `from` over `edge`, if any.
-    Hypothesis bestHypothesis(int from, int to, const GraphEdge& edge) const
+    // The best way to reach `to` from decoded region `from` over `edge` (in
+    // direction `dir` from `from`), if any; referenceWeight is the weight of
+    // the edge from `from`'s reference region (0 without one).
+    Hypothesis bestHypothesis(int from, int to, const GraphEdge& edge, EdgeDirection dir, float referenceWeight) const
     {
         const StripePattern& pattern = ws_.pattern;
         const Region& f = ws_.regions[from];
         Hypothesis best;
         best.error = 1e30f;
-        const EdgeDirection dir = directionFrom(edge, from);
-        float referenceWeight = 0;
-        if (f.reference >= 0)
-            for (int c = 0; c < 3; ++c)
-                referenceWeight = std::max(referenceWeight, std::abs(f.color[c] - ws_.regions[f.reference].color[c]));
         // An edge as weak as a null edge (fig. 6) is no stripe step: its
         // colour change is noise, and the normalised noise fits some symbol
         // now and then (sphere: regions one stripe off along its rim).
@@ -256,12 +253,22 @@ private:
     void pushNeighbours(int from)
     {
         const Region& f = ws_.regions[from];
+        float referenceWeight = 0;
+        if (f.reference >= 0)
+            for (int c = 0; c < 3; ++c)
+                referenceWeight = std::max(referenceWeight, std::abs(f.color[c] - ws_.regions[f.reference].color[c]));
         for (int i = 0; i < f.degree; ++i) {
             const GraphEdge& edge = ws_.edges[ws_.adjacency[f.adjacencyBegin + i]];
             const int to = otherEnd(edge, from);
-            if (ws_.regions[to].stripe == f.stripe) continue;
-            const Hypothesis h = bestHypothesis(from, to, edge);
-            if (h.stripe < 0 || h.stripe == ws_.regions[to].stripe) continue;
+            const int toStripe = ws_.regions[to].stripe;
+            if (toStripe == f.stripe) continue;
+            // Across the stripes the only hypothesis is the next stripe: a
+            // neighbour that holds it already needs no error evaluated (most
+            // neighbours of a decoded region, in the interior of a pass).
+            const EdgeDirection dir = directionFrom(edge, from);
+            if (dir != EdgeDirection::Parallel && toStripe == f.stripe + static_cast<int>(dir)) continue;
+            const Hypothesis h = bestHypothesis(from, to, edge, dir, referenceWeight);
+            if (h.stripe < 0 || h.stripe == toStripe) continue;
             int tokens = f.tokens;
             if (h.error < A_) {
                 tokens = std::min(tokens + 1, ws_.params.tokenBucketSize);
@@ -276,20 +283,24 @@ private:
             }
             ws_.open[ws_.openCount++] = {h.error, h.positionError, to, h.reference, static_cast<std::int16_t>(h.stripe),
                                          static_cast<std::int16_t>(tokens)};
-            std::push_heap(ws_.open.get(), ws_.open.get() + ws_.openCount, later);
+            std::push_heap(ws_.open.get(), ws_.open.get() + ws_.openCount, Later());
         }
     }
 
-    static bool later(const OpenEntry& l, const OpenEntry& r)
-    {
-        return l.error > r.error || (l.error == r.error && l.region > r.region);
-    }
+    // Heap order: the lowest error on top. A function object, not a function
+    // pointer, so that push_heap and pop_heap inline it.
+    struct Later {
+        bool operator()(const OpenEntry& l, const OpenEntry& r) const
+        {
+            return l.error > r.error || (l.error == r.error && l.region > r.region);
+        }
+    };
 
     // Step 2.
     void propagate()
     {
         while (ws_.openCount > 0) {
-            std::pop_heap(ws_.open.get(), ws_.open.get() + ws_.openCount, later);
+            std::pop_heap(ws_.open.get(), ws_.open.get() + ws_.openCount, Later());
             const OpenEntry entry = ws_.open[--ws_.openCount];
             Region& r = ws_.regions[entry.region];
             if (r.stripe == entry.stripe) {
@@ -397,15 +408,19 @@ private:
         for (int v = 0; v < ws_.regionCount; ++v) runs[v] = 0;
         auto left = [&](int v) { return runs[v] & 0xffff; };
         auto right = [&](int v) { return runs[v] >> 16; };
+        // The links that remain (regions undecoded since markLinks() have
+        // none), compacted in place into 2 * edge + confirmed, in edge order:
+        // the sweeps visit only them, in the same order.
         std::int32_t* link = ws_.edgeOrder.get();
-        for (int e = 0; e < ws_.edgeCount; ++e)  // links to regions undecoded since markLinks() are gone
-            if (ws_.regions[ws_.edges[e].a].stripe < 0 || ws_.regions[ws_.edges[e].b].stripe < 0) link[e] = kNoLink;
+        int linkCount = 0;
+        for (int e = 0; e < ws_.edgeCount; ++e)
+            if (link[e] != kNoLink && ws_.regions[ws_.edges[e].a].stripe >= 0 && ws_.regions[ws_.edges[e].b].stripe >= 0)
+                link[linkCount++] = 2 * e + (link[e] == kConfirmedLink ? 1 : 0);
         for (int sweep = 0; sweep < 2 * window + 2; ++sweep) {
             bool changed = false;
-            for (int e = 0; e < ws_.edgeCount; ++e) {
-                if (link[e] == kNoLink) continue;
-                const GraphEdge& edge = ws_.edges[e];
-                const int add = link[e] == kConfirmedLink ? 1 : 0;
+            for (int i = 0; i < linkCount; ++i) {
+                const GraphEdge& edge = ws_.edges[link[i] >> 1];
+                const int add = link[i] & 1;
                 // lo = the region on the left (lower stripe side), hi = on the right.
                 const bool aLeft = edge.direction == EdgeDirection::Forward;
                 const int lo = aLeft ? edge.a : edge.b, hi = aLeft ? edge.b : edge.a;
