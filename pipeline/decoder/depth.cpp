@@ -24,6 +24,15 @@ namespace {
 constexpr int kSearchRadius = 2;
 constexpr float kCentroidThreshold = 0.25f;
 
+// Per symbol code, the expected sign of each channel (the code's base-3
+// digits are slow to take apart per point).
+constexpr auto kSymbolSigns = [] {
+    std::array<std::array<float, 3>, kSymbolCount> signs{};
+    for (int s = 0; s < kSymbolCount; ++s)
+        for (int c = 0; c < 3; ++c) signs[s][c] = static_cast<float>(symbolChannel(static_cast<SymbolCode>(s), c));
+    return signs;
+}();
+
 }  // namespace
 
 void computePoints(DecoderWorkspace& ws)
@@ -43,18 +52,21 @@ void computePoints(DecoderWorkspace& ws)
             const Region& right = regions[label[x + 1]];
             if (left.stripe < 0 || right.stripe < 0 || std::abs(left.stripe - right.stripe) != 1) continue;
             const int edge = std::min(left.stripe, right.stripe);
-            const SymbolCode symbol = ws.pattern.edgeSymbol(edge);
             // Weights per channel: expected sign / range, walking left to right.
+            const std::array<float, 3>& sign = kSymbolSigns[ws.pattern.edgeSymbol(edge)];
             const float orientation = right.stripe > left.stripe ? 1.0f : -1.0f;
             cv::Vec3f weight;
             for (int c = 0; c < 3; ++c)
-                weight[c] = orientation * static_cast<float>(symbolChannel(symbol, c)) /
-                            std::max(0.5f * (left.range[c] + right.range[c]), 1.0f);
+                weight[c] = orientation * sign[c] / std::max(0.5f * (left.range[c] + right.range[c]), 1.0f);
             // Projected gradient at half-pixel positions i + 0.5, i in
-            // [lo, hi]: every sample both searches below can read.
+            // [lo, hi]: every sample both searches below can read. The last
+            // one is read only by the centroid of a peak at x + kSearchRadius:
+            // it is computed then, so most edges take 8 samples (two kernel
+            // steps of 4) rather than 9 (three).
             const int lo = std::max(x - 2 * kSearchRadius, 0), hi = std::min(x + 2 * kSearchRadius, w - 2);
             std::array<float, 4 * kSearchRadius + 1> samples;
-            projectedGradients(row, lo, hi - lo + 1, ws.rgbOffset, m, weight, samples.data());
+            const bool lastLater = hi - lo + 1 == static_cast<int>(samples.size());
+            projectedGradients(row, lo, hi - lo + 1 - lastLater, ws.rgbOffset, m, weight, samples.data());
             auto gradientAt = [&](int i) { return samples[i - lo]; };
             int peak = x;
             float peakValue = gradientAt(x);
@@ -69,6 +81,8 @@ void computePoints(DecoderWorkspace& ws)
             // centroid window in the image: an edge whose profile the image
             // border cuts off cannot be located.
             if (!(peakValue > 0) || peak - kSearchRadius < 0 || peak + kSearchRadius > w - 2) continue;
+            if (lastLater && peak == x + kSearchRadius)
+                projectedGradients(row, hi, 1, ws.rgbOffset, m, weight, &samples[hi - lo]);
             // Centroid of the peak's samples above a quarter of its height:
             // averages the noise over ~3 samples, and the threshold keeps the
             // tails of the neighbouring stripe edges out.
