@@ -1,12 +1,14 @@
 #!/bin/sh
 # Builds a flashable Debian 12 arm64 root file system for a Raspberry Pi
-# (3, 4, 5, CM4, CM5) with stria installed and its service enabled:
+# (3, Zero 2 W, 4, 400, CM4: Debian 12's kernel has no Pi 5 or CM5 support)
+# with stria installed and its service enabled:
 #   cross/make-rootfs.sh STRIA_DEB OUTDIR
 # Writes OUTDIR/rootfs/ (the tree), OUTDIR/rootfs.tar, OUTDIR/rootfs.ext4 (the
 # root partition, labelled RASPIROOT as in Debian's Raspberry Pi images) and
 # OUTDIR/firmware/ (the FAT boot partition's files: kernel, initramfs, device
 # trees, config.txt).
-# Slow (downloads ~300 MB, runs dpkg under qemu): not part of CI.
+# Slow (downloads ~350 MB, runs dpkg under qemu; ~20 minutes): not part of
+# CI. cross/smoke-rootfs.sh OUTDIR/rootfs checks the result.
 # docs/flashing.md describes writing it to an SD card.
 set -eu
 if [ $# -ne 2 ]; then
@@ -29,11 +31,25 @@ out=$(realpath "$out")
 # (dpkg cannot reach a .deb outside it), which fetches its dependencies.
 # Debian's kernel and the Raspberry Pi boot firmware (raspi-firmware copies
 # kernel, initramfs and device trees to /boot/firmware on every kernel
-# update); systemd-networkd with DHCP on eth0, ssh for the first login.
+# update) and initramfs-tools' recommends, which mmdebstrap leaves out:
+# zstd (its default compression) and busybox (the initramfs' rescue shell);
+# systemd-networkd with DHCP on eth0, ssh for the first login.
 packages=systemd-sysv,udev,kmod,linux-image-arm64,raspi-firmware,firmware-brcm80211
-packages=$packages,openssh-server,systemd-timesyncd,iproute2,sudo
+packages=$packages,busybox,zstd,openssh-server,systemd-timesyncd,iproute2,sudo
 
-"$cross/with-arm64-binfmt.sh" mmdebstrap --mode=root --architectures=arm64 --variant=apt \
+# The initramfs is generated once, by the last hook: under qemu that takes
+# ~9 minutes (MODULES=most: every storage and file system driver, as the
+# board's hardware cannot be detected here), and during the installation
+# both the kernel's hook and initramfs-tools' trigger would generate it.
+# INITRD=No makes the kernel's hook skip it; the trigger then finds no
+# initramfs to update. update-initramfs -c then runs raspi-firmware's hook,
+# which copies kernel, initramfs and device trees to /boot/firmware and
+# writes config.txt and cmdline.txt with ROOTPART and CONSOLES from
+# /etc/default/raspi-firmware: the root by label (the SD card is mmcblk0 or
+# mmcblk1 depending on the model), consoles on HDMI and the serial port, as
+# the hook detects them when it runs again on the board (kernel updates).
+raspi_defaults='s|^#ROOTPART=.*|ROOTPART=LABEL=RASPIROOT|; s|^#CONSOLES=.*|CONSOLES="tty0 ttyS1,115200"|'
+INITRD=No "$cross/with-arm64-binfmt.sh" mmdebstrap --mode=root --architectures=arm64 --variant=apt \
 	--components="main non-free-firmware" --include="$packages" \
 	--customize-hook="copy-in $deb /tmp" \
 	--customize-hook="chroot \"\$1\" apt-get install --yes --no-install-recommends /tmp/$(basename "$deb")" \
@@ -44,6 +60,9 @@ packages=$packages,openssh-server,systemd-timesyncd,iproute2,sudo
 	--customize-hook='chroot "$1" systemctl enable systemd-networkd ssh stria' \
 	--customize-hook='chroot "$1" systemctl is-enabled stria' \
 	--customize-hook='echo "root:stria" | chroot "$1" chpasswd' \
+	--customize-hook="sed -i '$raspi_defaults' \"\$1/etc/default/raspi-firmware\"" \
+	--customize-hook='grep -x ROOTPART=LABEL=RASPIROOT "$1/etc/default/raspi-firmware"' \
+	--customize-hook='chroot "$1" update-initramfs -c -k all' \
 	bookworm "$out/rootfs" \
 	"deb $mirror bookworm main non-free-firmware" \
 	"deb $mirror bookworm-updates main non-free-firmware" \
