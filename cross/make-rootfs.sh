@@ -47,8 +47,10 @@ packages=$packages,busybox,zstd,openssh-server,systemd-timesyncd,iproute2,sudo
 # writes config.txt and cmdline.txt with ROOTPART and CONSOLES from
 # /etc/default/raspi-firmware: the root by label (the SD card is mmcblk0 or
 # mmcblk1 depending on the model), consoles on HDMI and the serial port, as
-# the hook detects them when it runs again on the board (kernel updates).
-raspi_defaults='s|^#ROOTPART=.*|ROOTPART=LABEL=RASPIROOT|; s|^#CONSOLES=.*|CONSOLES="tty0 ttyS1,115200"|'
+# the hook detects them when it runs again on the board (kernel updates), and
+# no cma= (the hook adds cma=64M unless it runs on a Pi 4, which that stops
+# booting; the kernel's default is 64 MB anyway).
+raspi_defaults='s|^#ROOTPART=.*|ROOTPART=LABEL=RASPIROOT|; s|^#CONSOLES=.*|CONSOLES="tty0 ttyS1,115200"|; s|^#CMA=.*|CMA=0|'
 INITRD=No "$cross/with-arm64-binfmt.sh" mmdebstrap --mode=root --architectures=arm64 --variant=apt \
 	--components="main non-free-firmware" --include="$packages" \
 	--customize-hook="copy-in $deb /tmp" \

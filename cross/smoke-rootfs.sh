@@ -68,6 +68,7 @@ check "$kernel and $initrd in /boot/firmware, same as in /boot" \
 check "config.txt boots $kernel with $initrd" sh -c \
 	"grep -qx 'kernel=$kernel' '$firmware/config.txt' && grep -qx 'initramfs $initrd' '$firmware/config.txt'"
 check "cmdline.txt: root=LABEL=RASPIROOT" grep -q 'root=LABEL=RASPIROOT ' "$firmware/cmdline.txt"
+check "cmdline.txt: no cma= (a Pi 4 does not boot with it)" sh -c "! grep -q cma= '$firmware/cmdline.txt'"
 check "device trees of Pi 3 and Pi 4, GPU firmware" sh -c \
 	"cd '$firmware' && test -f bcm2837-rpi-3-b.dtb -a -f bcm2711-rpi-4-b.dtb -a -f start4.elf -a -f start.elf"
 # The initramfs must mount the root partition: the SD card drivers (Pi 3,
