@@ -123,9 +123,15 @@ SymbolCode optimalSymbol(const std::array<float, 3>& c, float t)
 
 void computeEdgeFeatures(DecoderWorkspace& ws)
 {
+    // One pass over the edges (they are ~1 MB at 780x580: three passes
+    // streamed them three times); the ranges are maxima, so the order in
+    // which the edges raise them does not matter.
     Region* regions = ws.regions.get();
+    const float t = static_cast<float>(ws.params.t), alpha = static_cast<float>(ws.params.alpha);
     for (int e = 0; e < ws.edgeCount; ++e) {
         GraphEdge& edge = ws.edges[e];
+        Region& a = regions[edge.a];
+        Region& b = regions[edge.b];
         // Direction (fig. 5): the border's normal (from a to b); if the
         // border is closed or ragged (its chord is short) the centroids decide
         // instead. Across the stripes if it is within 45 degrees of the
@@ -133,8 +139,8 @@ void computeEdgeFeatures(DecoderWorkspace& ws)
         float nx = static_cast<float>(edge.normalX), ny = static_cast<float>(edge.normalY);
         const float count = static_cast<float>(edge.borderCount);
         if (nx * nx + ny * ny < 0.0625f * count * count) {  // chord < border length / 4
-            nx = regions[edge.b].centroidX - regions[edge.a].centroidX;
-            ny = regions[edge.b].centroidY - regions[edge.a].centroidY;
+            nx = b.centroidX - a.centroidX;
+            ny = b.centroidY - a.centroidY;
         }
         // Within 45 degrees of the primary direction: |along| / length >= cos 45.
         const float length2 = nx * nx + ny * ny;
@@ -142,25 +148,19 @@ void computeEdgeFeatures(DecoderWorkspace& ws)
         edge.direction = length2 == 0 || 2 * along * along < length2 ? EdgeDirection::Parallel
                          : along > 0                                 ? EdgeDirection::Forward
                                                                      : EdgeDirection::Backward;
-    }
-    for (int e = 0; e < ws.edgeCount; ++e) {
-        const GraphEdge& edge = ws.edges[e];
         for (int c = 0; c < 3; ++c) {
-            const float change = std::abs(regions[edge.b].color[c] - regions[edge.a].color[c]);
-            regions[edge.a].range[c] = std::max(regions[edge.a].range[c], change);
-            regions[edge.b].range[c] = std::max(regions[edge.b].range[c], change);
+            const float change = std::abs(b.color[c] - a.color[c]);
+            a.range[c] = std::max(a.range[c], change);
+            b.range[c] = std::max(b.range[c], change);
         }
-    }
-    const float t = static_cast<float>(ws.params.t), alpha = static_cast<float>(ws.params.alpha);
-    for (int e = 0; e < ws.edgeCount; ++e) {
-        GraphEdge& edge = ws.edges[e];
         const EqualizedChange change = equalizedChange(ws, edge.a, edge.b);
         edge.weight = change.weight;
         edge.gradientError = edge.primaryGradient > 0
                                  ? std::min(edge.secondaryGradient / edge.primaryGradient, kMaxGradientError)
                                  : kMaxGradientError;
         edge.bestSymbol = optimalSymbol(change.c, t);
-        edge.bestError = symbolError(change, edge.bestSymbol, t) + alpha * edge.gradientError;
+        edge.bestMatch = symbolError(change, edge.bestSymbol, t);
+        edge.bestError = edge.bestMatch + alpha * edge.gradientError;
     }
 }
 

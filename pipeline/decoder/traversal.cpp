@@ -22,6 +22,7 @@
 #include "pipeline/decoder/workspace.hpp"
 
 #include <algorithm>
+#include <optional>
 
 namespace stria::pipeline {
 namespace {
@@ -54,6 +55,15 @@ EdgeDirection directionFrom(const GraphEdge& edge, int from)
 }
 
 int otherEnd(const GraphEdge& edge, int from) { return from == edge.a ? edge.b : edge.a; }
+
+// The edge's optimal symbol seen from `from`. Its error, edge.bestMatch, holds
+// from either side: the change from b is the negated change from a, and
+// symbolError of the negated change and the reversed symbol is the same
+// arithmetic on negated values, so the same float.
+SymbolCode bestSymbolFrom(const GraphEdge& edge, int from)
+{
+    return from == edge.a ? edge.bestSymbol : reversedSymbol(edge.bestSymbol);
+}
 
 // Pattern symbol seen when walking from stripe `from` to the neighbouring stripe `to`.
 SymbolCode stripeSymbol(const StripePattern& pattern, int from, int to)
@@ -99,15 +109,14 @@ public:
     }
 
 private:
+    // Eq. 9 for `symbol` on `edge` walked from `from` to `to`, and eq. 10
+    // into positionError if given.
     float edgeError(int from, int to, const GraphEdge& edge, SymbolCode symbol, float* positionError) const
     {
-        return edgeError(equalizedChange(ws_, from, to), edge, symbol, positionError);
-    }
-
-    float edgeError(const EqualizedChange& change, const GraphEdge& edge, SymbolCode symbol, float* positionError) const
-    {
-        const float match = symbolError(change, symbol, t_);
-        if (positionError) *positionError = beta_ * match / std::max(change.weight, 1.0f) + edge.gradientError;
+        const float match = bestSymbolFrom(edge, from) == symbol
+                                ? edge.bestMatch
+                                : symbolError(equalizedChange(ws_, from, to), symbol, t_);
+        if (positionError) *positionError = beta_ * match / std::max(edge.weight, 1.0f) + edge.gradientError;
         return match + alpha_ * edge.gradientError;
     }
 
@@ -143,7 +152,10 @@ private:
                     const int next = otherEnd(edge, endRegion);
                     if (ws_.regions[next].stripe >= 0 || std::find(path + begin, path + end, next) != path + end)
                         continue;
-                    const EqualizedChange change = equalizedChange(ws_, endRegion, next);
+                    // The change is computed for the first symbol other than
+                    // the optimal one (whose error the edge stage left).
+                    const SymbolCode best = bestSymbolFrom(edge, endRegion);
+                    std::optional<EqualizedChange> change;
                     SymbolCode tried = kNullSymbol;  // each required symbol once per edge
                     for (int c = 0; c < count; ++c) {
                         const int stripeHere = ws_.candidates[c] + (left ? 0 : end - begin - 1);
@@ -152,7 +164,9 @@ private:
                         const SymbolCode needed = stripeSymbol(pattern, stripeHere, stripeNext);
                         if (needed == tried) continue;
                         tried = needed;
-                        const float error = edgeError(change, edge, needed, nullptr);
+                        if (needed != best && !change) change = equalizedChange(ws_, endRegion, next);
+                        const float error = (needed == best ? edge.bestMatch : symbolError(*change, needed, t_)) +
+                                            alpha_ * edge.gradientError;
                         if (error < bestError) {
                             bestError = error;
                             bestRegion = next;

@@ -49,6 +49,9 @@ struct GraphEdge {
     float bestError = 0;     // eq. 9 for the optimal symbol
     SymbolCode bestSymbol = kNullSymbol;  // eq. 7, seen from a to b
     EdgeDirection direction = EdgeDirection::Parallel;
+    // symbolError of bestSymbol (bestError without the gradient term): the
+    // traversal tests this symbol on most edges it follows and reuses it.
+    float bestMatch = 0;
 };
 
 // A pending visit in the best-first propagation: region `region` is stripe
