@@ -29,7 +29,7 @@ void buildGraph(DecoderWorkspace& ws)
     ws.edgeCount = 0;
 
     // Per region the list of its edges to larger labels, in compact arrays
-    // in the scratch (the Region and GraphEdge records are 64 and 40 bytes
+    // in the scratch (the Region and GraphEdge records are 64 and 44 bytes
     // apart): the walk touches 8 bytes per edge.
     std::int32_t* head = ws.scratch.get();
     std::int32_t* next = head + ws.regionCount;
