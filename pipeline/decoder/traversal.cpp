@@ -22,6 +22,8 @@
 #include "pipeline/decoder/workspace.hpp"
 
 #include <algorithm>
+#include <bit>
+#include <cstdint>
 #include <optional>
 
 namespace stria::pipeline {
@@ -90,10 +92,7 @@ public:
         for (int e = 0; e < ws_.edgeCount; ++e)
             if (ws_.edges[e].direction != EdgeDirection::Parallel && ws_.edges[e].bestError < A_)
                 ws_.edgeOrder[seeds++] = e;
-        std::sort(ws_.edgeOrder.get(), ws_.edgeOrder.get() + seeds, [&](int l, int r) {
-            return ws_.edges[l].bestError < ws_.edges[r].bestError ||
-                   (ws_.edges[l].bestError == ws_.edges[r].bestError && l < r);
-        });
+        sortSeeds(seeds);
         ws_.passCount = 0;
         for (int i = 0; i < seeds; ++i) {
             const GraphEdge& edge = ws_.edges[ws_.edgeOrder[i]];
@@ -118,6 +117,36 @@ private:
                                 : symbolError(equalizedChange(ws_, from, to), symbol, t_);
         if (positionError) *positionError = beta_ * match / std::max(edge.weight, 1.0f) + edge.gradientError;
         return match + alpha_ * edge.gradientError;
+    }
+
+    // A seed's sort key: its error's bits made order-preserving, then its
+    // index. May alias: it lives in the int32 scratch.
+    struct __attribute__((may_alias)) SeedKey {
+        std::uint64_t value;
+        bool operator<(const SeedKey& other) const { return value < other.value; }
+    };
+
+    // Orders edgeOrder[0, count) by bestError, then by index, as 64-bit keys
+    // in the scratch (free after the graph stage; graphScratchEntries gives
+    // it 2 entries per edge): the
+    // sort compares integers instead of loading two edges per comparison.
+    void sortSeeds(int count)
+    {
+        SeedKey* keys = reinterpret_cast<SeedKey*>(ws_.scratch.get());
+        for (int i = 0; i < count; ++i) {
+            const int e = ws_.edgeOrder[i];
+            keys[i].value =
+                static_cast<std::uint64_t>(orderedBits(ws_.edges[e].bestError)) << 32 | static_cast<std::uint32_t>(e);
+        }
+        std::sort(keys, keys + count);
+        for (int i = 0; i < count; ++i) ws_.edgeOrder[i] = static_cast<std::int32_t>(keys[i].value & 0xffffffffu);
+    }
+
+    // Unsigned integers in the order of the floats (not NaN; -0 as +0).
+    static std::uint32_t orderedBits(float value)
+    {
+        const std::uint32_t bits = std::bit_cast<std::uint32_t>(value + 0.0f);
+        return bits & 0x80000000u ? ~bits : bits | 0x80000000u;
     }
 
     // Step 1. Returns true when the path was unique and its regions are assigned.
@@ -423,21 +452,26 @@ private:
         auto left = [&](int v) { return runs[v] & 0xffff; };
         auto right = [&](int v) { return runs[v] >> 16; };
         // The links that remain (regions undecoded since markLinks() have
-        // none), compacted in place into 2 * edge + confirmed, in edge order:
-        // the sweeps visit only them, in the same order.
-        std::int32_t* link = ws_.edgeOrder.get();
+        // none), in edge order, as pairs (left region, 2 * right region +
+        // confirmed) in the scratch (free after the graph stage; it holds 2
+        // entries per edge): the sweeps visit only them, in the same order,
+        // without reading the edges again.
+        const std::int32_t* link = ws_.edgeOrder.get();
+        std::int32_t* pairs = ws_.scratch.get();
         int linkCount = 0;
-        for (int e = 0; e < ws_.edgeCount; ++e)
-            if (link[e] != kNoLink && ws_.regions[ws_.edges[e].a].stripe >= 0 && ws_.regions[ws_.edges[e].b].stripe >= 0)
-                link[linkCount++] = 2 * e + (link[e] == kConfirmedLink ? 1 : 0);
+        for (int e = 0; e < ws_.edgeCount; ++e) {
+            const GraphEdge& edge = ws_.edges[e];
+            if (link[e] == kNoLink || ws_.regions[edge.a].stripe < 0 || ws_.regions[edge.b].stripe < 0) continue;
+            // lo = the region on the left (lower stripe side), hi = on the right.
+            const bool aLeft = edge.direction == EdgeDirection::Forward;
+            pairs[2 * linkCount] = aLeft ? edge.a : edge.b;
+            pairs[2 * linkCount + 1] = 2 * (aLeft ? edge.b : edge.a) + (link[e] == kConfirmedLink ? 1 : 0);
+            ++linkCount;
+        }
         for (int sweep = 0; sweep < 2 * window + 2; ++sweep) {
             bool changed = false;
             for (int i = 0; i < linkCount; ++i) {
-                const GraphEdge& edge = ws_.edges[link[i] >> 1];
-                const int add = link[i] & 1;
-                // lo = the region on the left (lower stripe side), hi = on the right.
-                const bool aLeft = edge.direction == EdgeDirection::Forward;
-                const int lo = aLeft ? edge.a : edge.b, hi = aLeft ? edge.b : edge.a;
+                const int lo = pairs[2 * i], hi = pairs[2 * i + 1] >> 1, add = pairs[2 * i + 1] & 1;
                 const int newRight = std::min(window, right(hi) + add), newLeft = std::min(window, left(lo) + add);
                 if (newRight > right(lo)) {
                     runs[lo] = (newRight << 16) | left(lo);

@@ -84,7 +84,9 @@ struct DecoderWorkspace {
     std::unique_ptr<std::byte[]> orderAndPoints;
     std::int32_t* pixelOrder = nullptr;
     ScanPoint* points = nullptr;
-    std::unique_ptr<std::int32_t[]> scratch;  // gradient row lanes, watershed queue blocks, region sums, edge lists
+    // Gradient row lanes, watershed queue blocks, region sums, graph edge
+    // lists, then the traversal's seed sort keys and links.
+    std::unique_ptr<std::int32_t[]> scratch;
 
     // Graph.
     int maxRegions = 0, maxEdges = 0, maxPoints = 0;
