@@ -33,6 +33,44 @@ constexpr auto kSymbolSigns = [] {
     return signs;
 }();
 
+// Camera rays along one image row: DecoderWorkspace::rayThroughPixel (a
+// bilinear look-up in the undistorted ray grid) with the row's share, its
+// grid row and vertical weight, computed once per row, and u divided by the
+// grid step as a product with its inverse, exact for a power-of-two step.
+// The same operations on the same values: the same rays, bit for bit.
+class RowRays {
+public:
+    RowRays(const DecoderWorkspace& ws, int y)
+        : gridStep_(ws.rayGridStep), inverseStep_(1.0 / ws.rayGridStep),
+          exactInverse_((ws.rayGridStep & (ws.rayGridStep - 1)) == 0), gridWidth_(ws.rayGridWidth)
+    {
+        const double gy = std::clamp(static_cast<double>(y) / gridStep_, 0.0, ws.rayGridHeight - 1.000001);
+        const int y0 = static_cast<int>(gy);
+        fy_ = gy - y0;
+        gridRow_ = ws.rayGrid.get() + y0 * ws.rayGridWidth;
+    }
+
+    cv::Vec3d at(double u) const
+    {
+        const double gx = std::clamp(exactInverse_ ? u * inverseStep_ : u / gridStep_, 0.0, gridWidth_ - 1.000001);
+        const int x0 = static_cast<int>(gx);
+        const double fx = gx - x0;
+        const cv::Vec2f* r = gridRow_ + x0;
+        const cv::Vec2d top = cv::Vec2d(r[0]) * (1 - fx) + cv::Vec2d(r[1]) * fx;
+        const cv::Vec2d bottom = cv::Vec2d(r[gridWidth_]) * (1 - fx) + cv::Vec2d(r[gridWidth_ + 1]) * fx;
+        const cv::Vec2d xn = top * (1 - fy_) + bottom * fy_;
+        return {xn[0], xn[1], 1.0};
+    }
+
+private:
+    int gridStep_;
+    double inverseStep_;
+    bool exactInverse_;
+    int gridWidth_;
+    double fy_ = 0;
+    const cv::Vec2f* gridRow_ = nullptr;
+};
+
 }  // namespace
 
 void computePoints(DecoderWorkspace& ws)
@@ -46,6 +84,7 @@ void computePoints(DecoderWorkspace& ws)
     for (int y = 0; y < h; ++y) {
         const std::int32_t* label = labels + static_cast<std::ptrdiff_t>(y) * w;
         const std::uint8_t* row = ws.frame.row(y);
+        const RowRays rays(ws, y);
         for (int x = 0; x + 1 < w; ++x) {
             if (label[x] == label[x + 1]) continue;
             const Region& left = regions[label[x]];
@@ -95,7 +134,7 @@ void computePoints(DecoderWorkspace& ws)
             }
             const float offset = moment / sum;
             const double u = peak + 0.5 + offset;
-            const auto point = RigModel::intersectRay(ws.rayThroughPixel(u, y), ws.lightPlanes[edge]);
+            const auto point = RigModel::intersectRay(rays.at(u), ws.lightPlanes[edge]);
             if (!point) continue;
             if (ws.pointCount == ws.maxPoints) {
                 ws.truncated = true;

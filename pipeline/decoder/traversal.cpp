@@ -128,8 +128,8 @@ private:
 
     // Orders edgeOrder[0, count) by bestError, then by index, as 64-bit keys
     // in the scratch (free after the graph stage; graphScratchEntries gives
-    // it 2 entries per edge): the
-    // sort compares integers instead of loading two edges per comparison.
+    // it 2 entries per edge): the sort compares integers instead of loading
+    // two edges per comparison.
     void sortSeeds(int count)
     {
         SeedKey* keys = reinterpret_cast<SeedKey*>(ws_.scratch.get());
