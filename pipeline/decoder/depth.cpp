@@ -80,6 +80,11 @@ void computePoints(DecoderWorkspace& ws)
     const std::int32_t* labels = ws.labels.get();
     const cv::Matx33f& m = ws.colorCorrection;
     ws.pointCount = 0;
+    // The regions' stripes in a compact array (in the scratch, free after
+    // the traversal): the scan looks up two per label change, and the
+    // 64-byte region records would bring one cache line each.
+    std::int32_t* stripes = ws.scratch.get();
+    for (int r = 0; r < ws.regionCount; ++r) stripes[r] = regions[r].stripe;
 
     for (int y = 0; y < h; ++y) {
         const std::int32_t* label = labels + static_cast<std::ptrdiff_t>(y) * w;
@@ -87,13 +92,14 @@ void computePoints(DecoderWorkspace& ws)
         const RowRays rays(ws, y);
         for (int x = 0; x + 1 < w; ++x) {
             if (label[x] == label[x + 1]) continue;
+            const int leftStripe = stripes[label[x]], rightStripe = stripes[label[x + 1]];
+            if (leftStripe < 0 || rightStripe < 0 || std::abs(leftStripe - rightStripe) != 1) continue;
             const Region& left = regions[label[x]];
             const Region& right = regions[label[x + 1]];
-            if (left.stripe < 0 || right.stripe < 0 || std::abs(left.stripe - right.stripe) != 1) continue;
-            const int edge = std::min(left.stripe, right.stripe);
+            const int edge = std::min(leftStripe, rightStripe);
             // Weights per channel: expected sign / range, walking left to right.
             const std::array<float, 3>& sign = kSymbolSigns[ws.pattern.edgeSymbol(edge)];
-            const float orientation = right.stripe > left.stripe ? 1.0f : -1.0f;
+            const float orientation = rightStripe > leftStripe ? 1.0f : -1.0f;
             cv::Vec3f weight;
             for (int c = 0; c < 3; ++c)
                 weight[c] = orientation * sign[c] / std::max(0.5f * (left.range[c] + right.range[c]), 1.0f);
@@ -111,10 +117,9 @@ void computePoints(DecoderWorkspace& ws)
             float peakValue = gradientAt(x);
             for (int i = std::max(x - kSearchRadius, 0); i <= std::min(x + kSearchRadius, w - 2); ++i) {
                 const float g = gradientAt(i);
-                if (g > peakValue) {
-                    peak = i;
-                    peakValue = g;
-                }
+                const bool higher = g > peakValue;  // selects, not a branch: which sample wins is noise
+                peak = higher ? i : peak;
+                peakValue = higher ? g : peakValue;
             }
             // The peak must lie inside the search window with its whole
             // centroid window in the image: an edge whose profile the image
@@ -125,10 +130,12 @@ void computePoints(DecoderWorkspace& ws)
             // Centroid of the peak's samples above a quarter of its height:
             // averages the noise over ~3 samples, and the threshold keeps the
             // tails of the neighbouring stripe edges out.
+            // Branch-free (the test above keeps the window in the image): a
+            // sample below the threshold adds a zero, which leaves the sums
+            // as they are, bit for bit (they start at +0 and are never -0).
             float sum = 0, moment = 0;
-            for (int i = std::max(peak - kSearchRadius, 0); i <= std::min(peak + kSearchRadius, w - 2); ++i) {
-                const float g = gradientAt(i) - kCentroidThreshold * peakValue;
-                if (g <= 0) continue;
+            for (int i = peak - kSearchRadius; i <= peak + kSearchRadius; ++i) {
+                const float g = std::max(gradientAt(i) - kCentroidThreshold * peakValue, 0.0f);
                 sum += g;
                 moment += g * static_cast<float>(i - peak);
             }

@@ -85,7 +85,8 @@ struct DecoderWorkspace {
     std::int32_t* pixelOrder = nullptr;
     ScanPoint* points = nullptr;
     // Gradient row lanes, watershed queue blocks, region sums, graph edge
-    // lists, then the traversal's seed sort keys and links.
+    // lists, then the traversal's seed sort keys and links, then the depth
+    // stage's region stripes.
     std::unique_ptr<std::int32_t[]> scratch;
 
     // Graph.
