@@ -155,6 +155,10 @@ void computeEdgeFeatures(DecoderWorkspace& ws)
         }
         const EqualizedChange change = equalizedChange(ws, edge.a, edge.b);
         edge.weight = change.weight;
+        // Symbols and their errors are only tested across the stripes (the
+        // traversal's seeds, paths and links; along them it tests null
+        // edges): an edge along them keeps the defaults.
+        if (edge.direction == EdgeDirection::Parallel) continue;
         edge.gradientError = edge.primaryGradient > 0
                                  ? std::min(edge.secondaryGradient / edge.primaryGradient, kMaxGradientError)
                                  : kMaxGradientError;

@@ -45,6 +45,8 @@ struct GraphEdge {
     std::int16_t normalX = 0, normalY = 0;
     float primaryGradient = 0, secondaryGradient = 0;  // eq. 8 sums over the border pixels
     float weight = 0;        // eq. 3: L-inf of the raw colour change
+    // gradientError, bestError, bestSymbol and bestMatch: set for edges across
+    // the stripes only (direction not Parallel), where symbols are tested.
     float gradientError = 0; // eq. 8
     float bestError = 0;     // eq. 9 for the optimal symbol
     SymbolCode bestSymbol = kNullSymbol;  // eq. 7, seen from a to b
