@@ -49,7 +49,9 @@ packages=$packages,busybox,zstd,openssh-server,systemd-timesyncd,iproute2,sudo
 # mmcblk1 depending on the model), consoles on HDMI and the serial port, as
 # the hook detects them when it runs again on the board (kernel updates), and
 # no cma= (the hook adds cma=64M unless it runs on a Pi 4, which that stops
-# booting; the kernel's default is 64 MB anyway).
+# booting; the kernel's default is 64 MB anyway). FSTYPE=ext4: the root's
+# type cannot be detected from fstab's label here, and without it the
+# initramfs gets no fsck.ext4 and never checks the root file system.
 raspi_defaults='s|^#ROOTPART=.*|ROOTPART=LABEL=RASPIROOT|; s|^#CONSOLES=.*|CONSOLES="tty0 ttyS1,115200"|; s|^#CMA=.*|CMA=0|'
 INITRD=No "$cross/with-arm64-binfmt.sh" mmdebstrap --mode=root --architectures=arm64 --variant=apt \
 	--components="main non-free-firmware" --include="$packages" \
@@ -64,6 +66,8 @@ INITRD=No "$cross/with-arm64-binfmt.sh" mmdebstrap --mode=root --architectures=a
 	--customize-hook='echo "root:stria" | chroot "$1" chpasswd' \
 	--customize-hook="sed -i '$raspi_defaults' \"\$1/etc/default/raspi-firmware\"" \
 	--customize-hook='grep -x ROOTPART=LABEL=RASPIROOT "$1/etc/default/raspi-firmware"' \
+	--customize-hook='sed -i "s/^FSTYPE=auto\$/FSTYPE=ext4/" "$1/etc/initramfs-tools/initramfs.conf"' \
+	--customize-hook='grep -x FSTYPE=ext4 "$1/etc/initramfs-tools/initramfs.conf"' \
 	--customize-hook='chroot "$1" update-initramfs -c -k all' \
 	bookworm "$out/rootfs" \
 	"deb $mirror bookworm main non-free-firmware" \

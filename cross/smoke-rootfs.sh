@@ -71,12 +71,12 @@ check "cmdline.txt: root=LABEL=RASPIROOT" grep -q 'root=LABEL=RASPIROOT ' "$firm
 check "cmdline.txt: no cma= (raspi-firmware omits it on a Pi 4)" sh -c "! grep -q cma= '$firmware/cmdline.txt'"
 check "device trees of Pi 3 and Pi 4, GPU firmware" sh -c \
 	"cd '$firmware' && test -f bcm2837-rpi-3-b.dtb -a -f bcm2711-rpi-4-b.dtb -a -f start4.elf -a -f start.elf"
-# The initramfs must mount the root partition: the SD card drivers (Pi 3,
-# Pi 4) and ext4 inside, busybox for a rescue shell, and it must unpack
-# (lsinitramfs reads it all).
+# The initramfs must check and mount the root partition: the SD card
+# drivers (Pi 3, Pi 4), ext4 and fsck.ext4 inside, busybox for a rescue
+# shell, and it must unpack (lsinitramfs reads it all).
 listing=$(in_root lsinitramfs "/boot/$initrd" 2>&1) || true
 for file in kernel/drivers/mmc/host/bcm2835.ko kernel/drivers/mmc/host/sdhci-iproc.ko \
-	kernel/fs/ext4/ext4.ko bin/busybox; do
+	kernel/fs/ext4/ext4.ko sbin/fsck.ext4 bin/busybox; do
 	check "initramfs has .../$file" sh -c 'printf "%s\n" "$1" | grep -q "/$2\$"' sh "$listing" "$file"
 done
 
