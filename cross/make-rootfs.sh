@@ -33,9 +33,10 @@ out=$(realpath "$out")
 # kernel, initramfs and device trees to /boot/firmware on every kernel
 # update) and initramfs-tools' recommends, which mmdebstrap leaves out:
 # zstd (its default compression) and busybox (the initramfs' rescue shell);
+# e2fsprogs (fsck.ext4 for the root, not in the apt variant);
 # systemd-networkd with DHCP on eth0, ssh for the first login.
 packages=systemd-sysv,udev,kmod,linux-image-arm64,raspi-firmware,firmware-brcm80211
-packages=$packages,busybox,zstd,openssh-server,systemd-timesyncd,iproute2,sudo
+packages=$packages,busybox,zstd,e2fsprogs,openssh-server,systemd-timesyncd,iproute2,sudo
 
 # The initramfs is generated once, by the last hook: under qemu that takes
 # ~9 minutes (MODULES=most: every storage and file system driver, as the
