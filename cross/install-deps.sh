@@ -16,7 +16,7 @@ HOST_PACKAGES="
   libcamera-dev libgpiod-dev linux-libc-dev libpng-dev libtiff-dev
   libgtest-dev libgmock-dev libbenchmark-dev umockdev libumockdev-dev
   python3-numpy python3-matplotlib
-  dpkg-dev file
+  dpkg-dev file systemd
 "
 ARM64_PACKAGES="
   crossbuild-essential-arm64 qemu-user libc6:arm64
