@@ -61,20 +61,6 @@ cv::Vec2f primaryDirection(const RigModel& rig, const StripePattern& pattern)
 
 }  // namespace
 
-cv::Vec3d DecoderWorkspace::rayThroughPixel(double u, double v) const
-{
-    const double gx = std::clamp(u / rayGridStep, 0.0, rayGridWidth - 1.000001);
-    const double gy = std::clamp(v / rayGridStep, 0.0, rayGridHeight - 1.000001);
-    const int x0 = static_cast<int>(gx), y0 = static_cast<int>(gy);
-    const double fx = gx - x0, fy = gy - y0;
-    const cv::Vec2f* r = rayGrid.get() + y0 * rayGridWidth + x0;
-    const cv::Vec2d top = cv::Vec2d(r[0]) * (1 - fx) + cv::Vec2d(r[1]) * fx;
-    const cv::Vec2d bottom = cv::Vec2d(r[rayGridWidth]) * (1 - fx) + cv::Vec2d(r[rayGridWidth + 1]) * fx;
-    const cv::Vec2d xn = top * (1 - fy) + bottom * fy;
-    return {xn[0], xn[1], 1.0};
-}
-
-
 Decoder::Decoder(std::unique_ptr<DecoderWorkspace> workspace) : ws_(std::move(workspace)) {}
 Decoder::~Decoder() = default;
 

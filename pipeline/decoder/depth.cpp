@@ -33,11 +33,11 @@ constexpr auto kSymbolSigns = [] {
     return signs;
 }();
 
-// Camera rays along one image row: DecoderWorkspace::rayThroughPixel (a
-// bilinear look-up in the undistorted ray grid) with the row's share, its
-// grid row and vertical weight, computed once per row, and u divided by the
-// grid step as a product with its inverse, exact for a power-of-two step.
-// The same operations on the same values: the same rays, bit for bit.
+// Camera rays along one image row: a bilinear look-up in the undistorted ray
+// grid (rayGrid, every rayGridStep pixels), with the row's grid row and
+// vertical weight computed once per row, and u divided by the grid step as a
+// product with its inverse, exact for a power-of-two step (the same rays, bit
+// for bit, as dividing per point did).
 class RowRays {
 public:
     RowRays(const DecoderWorkspace& ws, int y)

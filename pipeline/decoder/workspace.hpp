@@ -116,7 +116,6 @@ struct DecoderWorkspace {
     std::array<int, 3> rgbOffset{2, 1, 0};  // byte offset of R, G, B within a pixel
 
     std::size_t allocatedBytes = 0;  // by create(): Decoder::workspaceBytes()
-    cv::Vec3d rayThroughPixel(double u, double v) const;
 };
 
 // Watershed queue: entries per block, and the scratch entries it needs.
