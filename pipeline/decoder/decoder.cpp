@@ -61,6 +61,14 @@ cv::Vec2f primaryDirection(const RigModel& rig, const StripePattern& pattern)
 
 }  // namespace
 
+std::size_t scratchEntries(int width, int height, int maxRegions, int maxEdges)
+{
+    const std::size_t pixels = static_cast<std::size_t>(width) * height;
+    const std::size_t gradientLanes = 6 * static_cast<std::size_t>(width);  // 12 x width int16
+    return std::max({gradientLanes, queueScratchEntries(pixels), regionScratchEntries(maxRegions),
+                     graphScratchEntries(maxRegions, maxEdges)});
+}
+
 Decoder::Decoder(std::unique_ptr<DecoderWorkspace> workspace) : ws_(std::move(workspace)) {}
 Decoder::~Decoder() = default;
 
@@ -99,12 +107,7 @@ Result<std::unique_ptr<Decoder>> Decoder::create(const StripePattern& pattern, c
     ws->orderAndPoints = allocate<std::byte>(n * sizeof(std::int32_t), bytes);
     ws->pixelOrder = reinterpret_cast<std::int32_t*>(ws->orderAndPoints.get());
     ws->points = reinterpret_cast<ScanPoint*>(ws->orderAndPoints.get());
-    // Scratch: the gradient kernel's row lanes (6 x width int32), the
-    // watershed queue, the region sums and counters, the graph's edge lists.
-    ws->scratch = allocate<std::int32_t>(
-        std::max({queueScratchEntries(n), regionScratchEntries(ws->maxRegions),
-                  graphScratchEntries(ws->maxRegions, ws->maxEdges), 6 * static_cast<std::size_t>(w)}),
-        bytes);
+    ws->scratch = allocate<std::int32_t>(scratchEntries(w, h, ws->maxRegions, ws->maxEdges), bytes);
     ws->regions = allocate<Region>(ws->maxRegions, bytes);
     ws->edges = allocate<GraphEdge>(ws->maxEdges, bytes);
     ws->adjacency = allocate<std::int32_t>(2 * static_cast<std::size_t>(ws->maxEdges), bytes);

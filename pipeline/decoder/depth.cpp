@@ -24,15 +24,6 @@ namespace {
 constexpr int kSearchRadius = 2;
 constexpr float kCentroidThreshold = 0.25f;
 
-// Per symbol code, the expected sign of each channel (the code's base-3
-// digits are slow to take apart per point).
-constexpr auto kSymbolSigns = [] {
-    std::array<std::array<float, 3>, kSymbolCount> signs{};
-    for (int s = 0; s < kSymbolCount; ++s)
-        for (int c = 0; c < 3; ++c) signs[s][c] = static_cast<float>(symbolChannel(static_cast<SymbolCode>(s), c));
-    return signs;
-}();
-
 // Camera rays along one image row: a bilinear look-up in the undistorted ray
 // grid (rayGrid, every rayGridStep pixels), with the row's grid row and
 // vertical weight computed once per row, and u divided by the grid step as a
@@ -98,11 +89,11 @@ void computePoints(DecoderWorkspace& ws)
             const Region& right = regions[label[x + 1]];
             const int edge = std::min(leftStripe, rightStripe);
             // Weights per channel: expected sign / range, walking left to right.
-            const std::array<float, 3>& sign = kSymbolSigns[ws.pattern.edgeSymbol(edge)];
+            const std::array<std::int8_t, 3>& sign = kSymbolSigns[ws.pattern.edgeSymbol(edge)];
             const float orientation = rightStripe > leftStripe ? 1.0f : -1.0f;
             cv::Vec3f weight;
             for (int c = 0; c < 3; ++c)
-                weight[c] = orientation * sign[c] / std::max(0.5f * (left.range[c] + right.range[c]), 1.0f);
+                weight[c] = orientation * static_cast<float>(sign[c]) / std::max(0.5f * (left.range[c] + right.range[c]), 1.0f);
             // Projected gradient at half-pixel positions i + 0.5, i in
             // [lo, hi]: every sample both searches below can read. The last
             // one is read only by the centroid of a peak at x + kSearchRadius:

@@ -44,16 +44,6 @@ constexpr float kMaxGradientError = 10.0f;
 constexpr float kMaxCommonShare = 0.3f;
 constexpr float kMaxAlbedoChange = 0.15f;
 
-// Per symbol code, the expected sign of each channel (eq. 6 needs them for
-// every error evaluated; the code's base-3 digits are slow to take apart).
-constexpr auto kSymbolSigns = [] {
-    std::array<std::array<std::int8_t, 3>, kSymbolCount> signs{};
-    for (int s = 0; s < kSymbolCount; ++s)
-        for (int ch = 0; ch < 3; ++ch)
-            signs[s][ch] = static_cast<std::int8_t>(symbolChannel(static_cast<SymbolCode>(s), ch));
-    return signs;
-}();
-
 }  // namespace
 
 EqualizedChange equalizedChange(const DecoderWorkspace& ws, int from, int to)

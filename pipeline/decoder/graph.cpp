@@ -15,6 +15,32 @@
 
 namespace stria::pipeline {
 
+PairGradient pairGradient(const FrameView& frame, int x, int y, bool horizontal, const cv::Vec2f& primary)
+{
+    const int w = frame.width, h = frame.height;
+    const float px = primary[0], py = primary[1];
+    const std::uint8_t* r0 = frame.row(y);
+    PairGradient out;
+    for (int c = 0; c < 3; ++c) {
+        float gx, gy;
+        if (horizontal) {
+            const std::uint8_t* up = frame.row(std::max(y - 1, 0));
+            const std::uint8_t* down = frame.row(std::min(y + 1, h - 1));
+            gx = static_cast<float>(r0[3 * (x + 1) + c] - r0[3 * x + c]);
+            gy = 0.25f * static_cast<float>(down[3 * x + c] - up[3 * x + c] + down[3 * (x + 1) + c] -
+                                            up[3 * (x + 1) + c]);
+        } else {
+            const std::uint8_t* r1 = frame.row(y + 1);
+            const int xl = 3 * std::max(x - 1, 0) + c, xr = 3 * std::min(x + 1, w - 1) + c;
+            gy = static_cast<float>(r1[3 * x + c] - r0[3 * x + c]);
+            gx = 0.25f * static_cast<float>(r0[xr] - r0[xl] + r1[xr] - r1[xl]);
+        }
+        out.primary += std::abs(gx * px + gy * py);
+        out.secondary += std::abs(-gx * py + gy * px);
+    }
+    return out;
+}
+
 std::size_t graphScratchEntries(std::size_t regions, std::size_t edges)
 {
     // A list head per region; the next edge and the larger label per edge.
@@ -25,7 +51,6 @@ void buildGraph(DecoderWorkspace& ws)
 {
     const int w = ws.width, h = ws.height;
     const std::int32_t* label = ws.labels.get();
-    const float px = ws.primary[0], py = ws.primary[1];
     ws.edgeCount = 0;
 
     // Per region the list of its edges to larger labels, in compact arrays
@@ -66,29 +91,9 @@ void buildGraph(DecoderWorkspace& ws)
         ++edge.borderCount;
         std::int16_t& normal = horizontal ? edge.normalX : edge.normalY;
         if (normal > -32767 && normal < 32767) normal = static_cast<std::int16_t>(normal + sign);
-
-        // Image gradient at the middle of the pair, summed over channels.
-        const std::uint8_t* r0 = ws.frame.row(y);
-        float dp = 0, ds = 0;
-        for (int c = 0; c < 3; ++c) {
-            float gx, gy;
-            if (horizontal) {
-                const std::uint8_t* up = ws.frame.row(std::max(y - 1, 0));
-                const std::uint8_t* down = ws.frame.row(std::min(y + 1, h - 1));
-                gx = static_cast<float>(r0[3 * (x + 1) + c] - r0[3 * x + c]);
-                gy = 0.25f * static_cast<float>(down[3 * x + c] - up[3 * x + c] + down[3 * (x + 1) + c] -
-                                                up[3 * (x + 1) + c]);
-            } else {
-                const std::uint8_t* r1 = ws.frame.row(y + 1);
-                const int xl = 3 * std::max(x - 1, 0) + c, xr = 3 * std::min(x + 1, w - 1) + c;
-                gy = static_cast<float>(r1[3 * x + c] - r0[3 * x + c]);
-                gx = 0.25f * static_cast<float>(r0[xr] - r0[xl] + r1[xr] - r1[xl]);
-            }
-            dp += std::abs(gx * px + gy * py);
-            ds += std::abs(-gx * py + gy * px);
-        }
-        edge.primaryGradient += dp;
-        edge.secondaryGradient += ds;
+        const PairGradient gradient = pairGradient(ws.frame, x, y, horizontal, ws.primary);
+        edge.primaryGradient += gradient.primary;
+        edge.secondaryGradient += gradient.secondary;
     };
 
     for (int y = 0; y < h; ++y) {

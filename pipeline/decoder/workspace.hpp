@@ -124,6 +124,29 @@ std::size_t queueScratchEntries(std::size_t pixels);
 // Region statistics and graph construction: the scratch entries they need.
 std::size_t regionScratchEntries(std::size_t regions);
 std::size_t graphScratchEntries(std::size_t regions, std::size_t edges);
+// The scratch every stage's share fits in (decoder.cpp): the gradient kernel's
+// row lanes, the watershed queue, the region sums, the graph's edge lists;
+// the traversal's seed keys and link pairs (2 entries per edge) and depth's
+// region stripes fit in the graph's share.
+std::size_t scratchEntries(int width, int height, int maxRegions, int maxEdges);
+
+// Per symbol code, the expected sign (-1, 0, +1) of each channel:
+// symbolChannel from a table (its base-3 digits are slow to take apart in the
+// per-edge and per-point loops).
+inline constexpr auto kSymbolSigns = [] {
+    std::array<std::array<std::int8_t, 3>, kSymbolCount> signs{};
+    for (int s = 0; s < kSymbolCount; ++s)
+        for (int c = 0; c < 3; ++c) signs[s][c] = static_cast<std::int8_t>(symbolChannel(static_cast<SymbolCode>(s), c));
+    return signs;
+}();
+
+// Eq. 8's terms for one border pixel pair, (x, y)-(x + 1, y) if horizontal,
+// else (x, y)-(x, y + 1): the image gradient at its middle, summed over the
+// channels as |component along primary| and |component across it| (graph.cpp).
+struct PairGradient {
+    float primary = 0, secondary = 0;
+};
+PairGradient pairGradient(const FrameView& frame, int x, int y, bool horizontal, const cv::Vec2f& primary);
 
 // The stages, in order.
 void computeGradient(DecoderWorkspace& ws);

@@ -248,12 +248,11 @@ std::vector<Region> referenceRegionColours(const DecoderWorkspace& ws)
 }
 
 // The region adjacency graph by a map from label pairs to edges, pairs in
-// the same raster order (so edge indices and float sums agree), gradients
-// as first written.
+// the same raster order (so edge indices and float sums agree); the
+// per-pair gradient is the stage's own pairGradient.
 std::vector<GraphEdge> referenceGraph(const DecoderWorkspace& ws)
 {
     const int w = ws.width, h = ws.height;
-    const float px = ws.primary[0], py = ws.primary[1];
     std::map<std::pair<std::int32_t, std::int32_t>, std::size_t> index;
     std::vector<GraphEdge> edges;
     auto addPair = [&](int x, int y, bool horizontal) {
@@ -269,27 +268,9 @@ std::vector<GraphEdge> referenceGraph(const DecoderWorkspace& ws)
         GraphEdge& edge = edges[it->second];
         ++edge.borderCount;
         (horizontal ? edge.normalX : edge.normalY) += static_cast<std::int16_t>(sign);
-        const std::uint8_t* r0 = ws.frame.row(y);
-        float dp = 0, ds = 0;
-        for (int c = 0; c < 3; ++c) {
-            float gx, gy;
-            if (horizontal) {
-                const std::uint8_t* up = ws.frame.row(std::max(y - 1, 0));
-                const std::uint8_t* down = ws.frame.row(std::min(y + 1, h - 1));
-                gx = static_cast<float>(r0[3 * (x + 1) + c] - r0[3 * x + c]);
-                gy = 0.25f * static_cast<float>(down[3 * x + c] - up[3 * x + c] + down[3 * (x + 1) + c] -
-                                                up[3 * (x + 1) + c]);
-            } else {
-                const std::uint8_t* r1 = ws.frame.row(y + 1);
-                const int xl = 3 * std::max(x - 1, 0) + c, xr = 3 * std::min(x + 1, w - 1) + c;
-                gy = static_cast<float>(r1[3 * x + c] - r0[3 * x + c]);
-                gx = 0.25f * static_cast<float>(r0[xr] - r0[xl] + r1[xr] - r1[xl]);
-            }
-            dp += std::abs(gx * px + gy * py);
-            ds += std::abs(-gx * py + gy * px);
-        }
-        edge.primaryGradient += dp;
-        edge.secondaryGradient += ds;
+        const PairGradient gradient = pairGradient(ws.frame, x, y, horizontal, ws.primary);
+        edge.primaryGradient += gradient.primary;
+        edge.secondaryGradient += gradient.secondary;
     };
     for (int y = 0; y < h; ++y) {
         for (int x = 0; x + 1 < w; ++x)
@@ -316,9 +297,7 @@ struct FloodCase {
         ws.orderAndPoints = std::make_unique<std::byte[]>(4 * n);
         ws.pixelOrder = reinterpret_cast<std::int32_t*>(ws.orderAndPoints.get());
         ws.maxEdges = 3 * maxRegions;
-        ws.scratch = std::make_unique<std::int32_t[]>(
-            std::max({queueScratchEntries(n), regionScratchEntries(maxRegions),
-                      graphScratchEntries(maxRegions, ws.maxEdges), 6 * n / image.rows}));
+        ws.scratch = std::make_unique<std::int32_t[]>(scratchEntries(image.cols, image.rows, maxRegions, ws.maxEdges));
         ws.regions = std::make_unique<Region[]>(maxRegions);
         ws.edges = std::make_unique<GraphEdge[]>(ws.maxEdges);
         ws.adjacency = std::make_unique<std::int32_t[]>(2 * static_cast<std::size_t>(ws.maxEdges));
