@@ -11,6 +11,11 @@
 // tilted plane this halves the depth noise of a 3-point parabola (0.19 mm
 // against 0.33 mm std at noise 2; docs/algorithm.md).
 // The point is where the camera ray through (u, row) meets edge k's light plane.
+// One point per edge and row: the projector's light plane k meets a row's
+// epipolar plane in a single ray, which lights only the first surface it
+// hits; of two points of edge k in a row, the farther lies in the nearer's
+// shadow and is dropped (a stripe decoded across a depth step with the
+// offset of the background's sequence; docs/algorithm.md section 7).
 #include "pipeline/decoder/simd.hpp"
 #include "pipeline/decoder/workspace.hpp"
 
@@ -76,11 +81,17 @@ void computePoints(DecoderWorkspace& ws)
     // 64-byte region records would bring one cache line each.
     std::int32_t* stripes = ws.scratch.get();
     for (int r = 0; r < ws.regionCount; ++r) stripes[r] = regions[r].stripe;
+    // Per pattern edge, the index of the current row's point of that edge
+    // (-1 = none yet), in the seeding's candidate list (one entry per
+    // pattern edge, free after the traversal).
+    std::int32_t* rowPoint = ws.candidates.get();
+    const int edgeCount = ws.pattern.edgeCount();
 
     for (int y = 0; y < h; ++y) {
         const std::int32_t* label = labels + static_cast<std::ptrdiff_t>(y) * w;
         const std::uint8_t* row = ws.frame.row(y);
         const RowRays rays(ws, y);
+        std::fill(rowPoint, rowPoint + edgeCount, -1);
         for (int x = 0; x + 1 < w; ++x) {
             if (label[x] == label[x + 1]) continue;
             const int leftStripe = stripes[label[x]], rightStripe = stripes[label[x + 1]];
@@ -134,13 +145,21 @@ void computePoints(DecoderWorkspace& ws)
             const double u = peak + 0.5 + offset;
             const auto point = RigModel::intersectRay(rays.at(u), ws.lightPlanes[edge]);
             if (!point) continue;
+            const ScanPoint scanPoint{cv::Vec3f(static_cast<float>((*point)[0]), static_cast<float>((*point)[1]),
+                                                static_cast<float>((*point)[2])),
+                                      cv::Point2f(static_cast<float>(u), static_cast<float>(y)), edge};
+            // Along one projector ray the camera depth grows with the
+            // distance from the projector: the smaller z is the lit point.
+            if (const int earlier = rowPoint[edge]; earlier >= 0) {
+                if (scanPoint.position[2] < ws.points[earlier].position[2]) ws.points[earlier] = scanPoint;
+                continue;
+            }
             if (ws.pointCount == ws.maxPoints) {
                 ws.truncated = true;
                 return;
             }
-            ws.points[ws.pointCount++] = {cv::Vec3f(static_cast<float>((*point)[0]), static_cast<float>((*point)[1]),
-                                                    static_cast<float>((*point)[2])),
-                                          cv::Point2f(static_cast<float>(u), static_cast<float>(y)), edge};
+            rowPoint[edge] = ws.pointCount;
+            ws.points[ws.pointCount++] = scanPoint;
         }
     }
 }
