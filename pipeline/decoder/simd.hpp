@@ -45,4 +45,23 @@ void scatterLabelsByValueReference(const std::uint8_t* values, const std::int32_
 void scatterLabelsByValue(const std::uint8_t* values, const std::int32_t* labels, int width, std::int32_t* cursor,
                           std::int32_t* out);
 
+// Region graph (graph.cpp). Bit i of the result is set where a[i] != b[i],
+// for i < count <= 64: with b = a + 1 the borders between horizontal
+// neighbours of a label row, with b = a + width those to the row below.
+std::uint64_t borderMaskReference(const std::int32_t* a, const std::int32_t* b, int count);
+std::uint64_t borderMask(const std::int32_t* a, const std::int32_t* b, int count);
+// Eq. 8's terms of one border pixel pair: the image gradient at the pair's
+// middle, summed over the channels as |component along primary| and
+// |component across it|. The reference is pairGradient (workspace.hpp), for
+// every pair; these give its floats bit for bit from BGR/RGB rows, for the
+// pair (x, y)-(x + 1, y) from rows y - 1, y, y + 1 (clamped by the caller)
+// with x + 2 < width, and for (x, y)-(x, y + 1) from rows y, y + 1 with
+// 0 < x and x + 2 < width (they read 8 bytes from 3 * x, and from 3 * x - 3).
+struct PairGradient {
+    float primary = 0, secondary = 0;
+};
+PairGradient horizontalPairGradient(const std::uint8_t* up, const std::uint8_t* row, const std::uint8_t* down, int x,
+                                    const cv::Vec2f& primary);
+PairGradient verticalPairGradient(const std::uint8_t* row, const std::uint8_t* below, int x, const cv::Vec2f& primary);
+
 }  // namespace stria::pipeline

@@ -12,6 +12,7 @@
 //   depth.cpp      sub-pixel stripe edges per row, ray/light-plane points
 
 #include "pipeline/decoder.hpp"
+#include "pipeline/decoder/simd.hpp"
 
 #include <array>
 #include <cstdint>
@@ -142,10 +143,8 @@ inline constexpr auto kSymbolSigns = [] {
 
 // Eq. 8's terms for one border pixel pair, (x, y)-(x + 1, y) if horizontal,
 // else (x, y)-(x, y + 1): the image gradient at its middle, summed over the
-// channels as |component along primary| and |component across it| (graph.cpp).
-struct PairGradient {
-    float primary = 0, secondary = 0;
-};
+// channels as |component along primary| and |component across it| (graph.cpp;
+// the stage's kernels in simd.hpp give the same floats).
 PairGradient pairGradient(const FrameView& frame, int x, int y, bool horizontal, const cv::Vec2f& primary);
 
 // The stages, in order.

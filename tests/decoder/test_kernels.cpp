@@ -162,6 +162,49 @@ TEST(DecoderKernels, RegionStatisticsKernelsMatchReferenceOnSimulatorFrame)
     EXPECT_EQ(regionKernelRowsDiffering(frame, 8u), 0);
 }
 
+// Border masks and border pair gradients that differ (bitwise) from the
+// references: every count of a mask block on random label rows with few
+// labels, every pair the pair kernels reach on the frame, both directions.
+int graphKernelsDiffering(const cv::Mat& frame, unsigned seed)
+{
+    const int w = frame.cols, h = frame.rows;
+    std::mt19937 rng(seed);
+    std::vector<std::int32_t> labels(130);
+    int differing = 0;
+    for (int count = 0; count <= 64; ++count) {
+        for (std::int32_t& l : labels) l = static_cast<std::int32_t>(rng() % 3);
+        differing += borderMask(labels.data(), labels.data() + 1, count) !=
+                     borderMaskReference(labels.data(), labels.data() + 1, count);
+        differing += borderMask(labels.data(), labels.data() + 65, count) !=
+                     borderMaskReference(labels.data(), labels.data() + 65, count);
+    }
+    const FrameView view{frame.data, w, h, static_cast<std::ptrdiff_t>(frame.step), PixelFormat::Bgr8};
+    const cv::Vec2f primary(0.8f, -0.6f);
+    auto equal = [](const PairGradient& a, const PairGradient& b) {
+        return a.primary == b.primary && a.secondary == b.secondary;
+    };
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x + 2 < w; ++x) {
+            differing += !equal(horizontalPairGradient(frame.ptr(std::max(y - 1, 0)), frame.ptr(y),
+                                                       frame.ptr(std::min(y + 1, h - 1)), x, primary),
+                                pairGradient(view, x, y, true, primary));
+            if (x > 0 && y + 1 < h)
+                differing += !equal(verticalPairGradient(frame.ptr(y), frame.ptr(y + 1), x, primary),
+                                    pairGradient(view, x, y, false, primary));
+        }
+    return differing;
+}
+
+TEST(DecoderKernels, GraphKernelsMatchReferenceOnRandomAndSimulatorFrames)
+{
+    // Full byte range (differences up to +-1020 before the quarter), and the
+    // texture and noise of a simulator frame.
+    EXPECT_EQ(graphKernelsDiffering(randomFrame(37, 9, 21), 3u), 0);
+    const cv::Mat frame = renderFrame(hal::sim::SceneKind::TexturedRelief, hal::sim::Albedo::Photo, 4);
+    ASSERT_FALSE(frame.empty());
+    EXPECT_EQ(graphKernelsDiffering(frame, 4u), 0);
+}
+
 // The watershed as first written: one FIFO per level linked through the
 // pixels, integer division for the coordinates.
 int referenceWatershed(const std::uint8_t* g, int w, int h, int maxRegions, std::vector<std::int32_t>& label)
