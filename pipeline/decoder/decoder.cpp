@@ -63,9 +63,8 @@ cv::Vec2f primaryDirection(const RigModel& rig, const StripePattern& pattern)
 
 std::size_t scratchEntries(int width, int height, int maxRegions, int maxEdges)
 {
-    const std::size_t pixels = static_cast<std::size_t>(width) * height;
     const std::size_t gradientLanes = 6 * static_cast<std::size_t>(width);  // 12 x width int16
-    return std::max({gradientLanes, queueScratchEntries(pixels), regionScratchEntries(maxRegions),
+    return std::max({gradientLanes, watershedScratchEntries(width, height), regionScratchEntries(maxRegions),
                      graphScratchEntries(maxRegions, maxEdges)});
 }
 

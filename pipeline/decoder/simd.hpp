@@ -21,6 +21,17 @@ void gradientRowReference(const std::uint8_t* up, const std::uint8_t* row, const
 void gradientRow(const std::uint8_t* up, const std::uint8_t* row, const std::uint8_t* down, int width, bool alongY,
                  std::uint8_t* magnitude, std::uint8_t* along, std::int16_t* lanes);
 
+// Watershed by steepest descent (watershed.cpp): per pixel of a row, the
+// direction of its lowest 4-neighbour if that is strictly lower than the
+// pixel, ties broken in the order up, left, right, down; kDescentFlat if no
+// neighbour is lower. up and down are the rows above and below, a row of 255
+// on the image border (a missing neighbour is never lower).
+inline constexpr std::uint8_t kDescentUp = 0, kDescentLeft = 1, kDescentRight = 2, kDescentDown = 3, kDescentFlat = 8;
+void descentRowReference(const std::uint8_t* up, const std::uint8_t* row, const std::uint8_t* down, int width,
+                         std::uint8_t* code);
+void descentRow(const std::uint8_t* up, const std::uint8_t* row, const std::uint8_t* down, int width,
+                std::uint8_t* code);
+
 // Edge location (depth.cpp): for the count samples i = first, first + 1, ...
 // of a row, the colour change from pixel i to i + 1 (R G B at rgbOffset),
 // crosstalk-corrected by m and projected on weight: weight . (m * change),

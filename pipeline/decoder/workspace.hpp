@@ -4,7 +4,7 @@
 // writes the workspace and nothing else, so the order in decoder.cpp is the
 // whole data flow:
 //   gradient.cpp   colour gradient magnitude (8 bit)
-//   watershed.cpp  superpixel labels (bucket-queue flooding)
+//   watershed.cpp  superpixel labels (watershed by steepest descent)
 //   regions.cpp    per-superpixel median colour, crosstalk-corrected; centroid
 //   graph.cpp      region adjacency graph with border statistics
 //   edges.cpp      edge weight, symbol, errors (eq. 1-9), direction (fig. 5)
@@ -80,14 +80,14 @@ struct DecoderWorkspace {
     // Per pixel.
     std::unique_ptr<std::uint8_t[]> gradient;
     std::unique_ptr<std::int32_t[]> labels;
-    // One buffer, three uses in turn: pixel indices by gradient level
-    // (watershed), then labels by channel value (regions), then the output
-    // points (depth).
+    // One buffer, three uses in turn: the watershed's plateau queue and
+    // union-find parents, then labels by channel value (regions), then the
+    // output points (depth).
     // Points are 24 bytes, so maxPoints = pixels / 6 fits exactly.
     std::unique_ptr<std::byte[]> orderAndPoints;
     std::int32_t* pixelOrder = nullptr;
     ScanPoint* points = nullptr;
-    // Gradient row lanes, watershed queue blocks, region sums, graph edge
+    // Gradient row lanes, watershed descent codes, region sums, graph edge
     // lists, then the traversal's seed sort keys and links, then the depth
     // stage's region stripes.
     std::unique_ptr<std::int32_t[]> scratch;
@@ -119,14 +119,13 @@ struct DecoderWorkspace {
     std::size_t allocatedBytes = 0;  // by create(): Decoder::workspaceBytes()
 };
 
-// Watershed queue: entries per block, and the scratch entries it needs.
-constexpr int kQueueBlock = 16;  // one cache line
-std::size_t queueScratchEntries(std::size_t pixels);
+// Watershed: the scratch entries it needs (a descent code byte per pixel).
+std::size_t watershedScratchEntries(int width, int height);
 // Region statistics and graph construction: the scratch entries they need.
 std::size_t regionScratchEntries(std::size_t regions);
 std::size_t graphScratchEntries(std::size_t regions, std::size_t edges);
 // The scratch every stage's share fits in (decoder.cpp): the gradient kernel's
-// row lanes, the watershed queue, the region sums, the graph's edge lists;
+// row lanes, the watershed's codes, the region sums, the graph's edge lists;
 // the traversal's seed keys and link pairs (2 entries per edge) and depth's
 // region stripes fit in the graph's share.
 std::size_t scratchEntries(int width, int height, int maxRegions, int maxEdges);

@@ -1,7 +1,9 @@
 // The decoder's fast kernels against their scalar references, exactly: the
 // gradient row (NEON on ARM, int16 lanes elsewhere) on random rows and
-// simulator frames, the block-queue watershed against the plain linked-list
-// flooding it replaced, label for label, and the counting-sort region colours
+// simulator frames, the steepest-descent watershed (its row kernel NEON on
+// ARM) against a plain scalar writing of the same algorithm, label for label,
+// on simulator frames, noise, terraces and images 1-2 pixels wide or high,
+// and the counting-sort region colours
 // against the nth_element medians they replaced, with their row kernels
 // (NEON on ARM) against scalar references, and the region graph against a
 // map-based construction.
@@ -14,7 +16,9 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <deque>
 #include <map>
+#include <numeric>
 #include <random>
 #include <vector>
 
@@ -205,57 +209,196 @@ TEST(DecoderKernels, GraphKernelsMatchReferenceOnRandomAndSimulatorFrames)
     EXPECT_EQ(graphKernelsDiffering(frame, 4u), 0);
 }
 
-// The watershed as first written: one FIFO per level linked through the
-// pixels, integer division for the coordinates.
+// The watershed by steepest descent written plainly: an arrow to the lowest
+// strictly lower 4-neighbour (ties up, left, right, down); pixels of a plateau
+// without one take an arrow breadth-first from the plateau's lower border
+// (first the pixels next to it, in raster order, then FIFO); the remaining
+// flat pixels are regional minima, found by flood fill and numbered in raster
+// order of their first pixel, the first maxRegions in (level, raster) order
+// kept when over capacity and the rest numbered from maxRegions on; each pixel
+// takes the minimum at the end of its arrows; over capacity, one raster sweep
+// over 4-neighbour pairs joins each set of basins without a kept one to its
+// neighbour (the larger root to the smaller).
 int referenceWatershed(const std::uint8_t* g, int w, int h, int maxRegions, std::vector<std::int32_t>& label)
 {
     const int n = w * h;
-    std::vector<std::int32_t> order(n), next(n);
-    std::array<std::int32_t, 257> start{};
-    for (int p = 0; p < n; ++p) ++start[g[p] + 1];
-    for (int l = 0; l < 256; ++l) start[l + 1] += start[l];
-    std::array<std::int32_t, 256> fill;
-    for (int l = 0; l < 256; ++l) fill[l] = start[l];
-    for (int p = 0; p < n; ++p) order[fill[g[p]]++] = p;
-    label.assign(n, -1);
-    std::array<std::int32_t, 256> head, tail;
-    head.fill(-1);
-    tail.fill(-1);
-    auto push = [&](int level, std::int32_t p) {
-        next[p] = -1;
-        if (tail[level] < 0) head[level] = p;
-        else next[tail[level]] = p;
-        tail[level] = p;
+    auto neighbours = [&](int p) {  // up, left, right, down; -1 outside the image
+        const int x = p % w, y = p / w;
+        return std::array<int, 4>{y > 0 ? p - w : -1, x > 0 ? p - 1 : -1, x + 1 < w ? p + 1 : -1,
+                                  y + 1 < h ? p + w : -1};
     };
-    auto drain = [&](int level) {
-        while (head[level] >= 0) {
-            const std::int32_t p = head[level];
-            head[level] = next[p];
-            if (head[level] < 0) tail[level] = -1;
-            const int x = p % w, y = p / w;
-            auto visit = [&](std::int32_t q) {
-                if (label[q] >= 0) return;
-                label[q] = label[p];
-                push(std::max<int>(g[q], level), q);
-            };
-            if (x > 0) visit(p - 1);
-            if (x + 1 < w) visit(p + 1);
-            if (y > 0) visit(p - w);
-            if (y + 1 < h) visit(p + w);
-        }
-    };
-    int regions = 0;
-    for (int level = 0; level < 256; ++level) {
-        drain(level);
-        for (int i = start[level]; i < start[level + 1]; ++i) {
-            const std::int32_t p = order[i];
-            if (label[p] >= 0 || regions == maxRegions) continue;
-            label[p] = regions++;
-            push(level, p);
-            drain(level);
-        }
+    std::vector<int> next(n, -1);
+    for (int p = 0; p < n; ++p) {
+        int lowest = g[p];
+        for (int q : neighbours(p))
+            if (q >= 0 && g[q] < lowest) {
+                lowest = g[q];
+                next[p] = q;
+            }
     }
-    return regions;
+    const std::vector<int> descent = next;
+    std::deque<int> queue;
+    for (int p = 0; p < n; ++p)
+        if (next[p] < 0)
+            for (int q : neighbours(p))
+                if (q >= 0 && g[q] == g[p] && descent[q] >= 0) {
+                    next[p] = q;
+                    queue.push_back(p);
+                    break;
+                }
+    for (; !queue.empty(); queue.pop_front())
+        for (int q : neighbours(queue.front()))
+            if (q >= 0 && g[q] == g[queue.front()] && next[q] < 0) {
+                next[q] = queue.front();
+                queue.push_back(q);
+            }
+    std::vector<int> minimumOf(n, -1), firstPixel;
+    for (int p = 0; p < n; ++p) {
+        if (next[p] >= 0 || minimumOf[p] >= 0) continue;
+        std::vector<int> stack{p};
+        minimumOf[p] = static_cast<int>(firstPixel.size());
+        while (!stack.empty()) {
+            const int q = stack.back();
+            stack.pop_back();
+            for (int r : neighbours(q))
+                if (r >= 0 && next[r] < 0 && minimumOf[r] < 0) {
+                    EXPECT_EQ(g[r], g[q]);  // adjacent flat pixels are on one level
+                    minimumOf[r] = minimumOf[p];
+                    stack.push_back(r);
+                }
+        }
+        firstPixel.push_back(p);
+    }
+    const int minima = static_cast<int>(firstPixel.size());
+    std::vector<int> byLevel(minima);
+    std::iota(byLevel.begin(), byLevel.end(), 0);
+    std::stable_sort(byLevel.begin(), byLevel.end(), [&](int a, int b) { return g[firstPixel[a]] < g[firstPixel[b]]; });
+    std::vector<bool> kept(minima, false);
+    for (int k = 0; k < std::min(minima, maxRegions); ++k) kept[byLevel[k]] = true;
+    std::vector<int> number(minima);
+    int keptCount = 0, excessCount = 0;
+    for (int m = 0; m < minima; ++m) number[m] = kept[m] ? keptCount++ : maxRegions + excessCount++;
+    label.assign(n, -1);
+    for (int p = 0; p < n; ++p) {
+        int q = p;
+        while (next[q] >= 0) q = next[q];
+        label[p] = number[minimumOf[q]];
+    }
+    if (minima <= maxRegions) return minima;
+    std::vector<int> parent(minima);
+    std::iota(parent.begin(), parent.end(), 0);
+    auto root = [&](int b) {
+        while (parent[b] != b) b = parent[b];
+        return b;
+    };
+    auto join = [&](int p, int q) {
+        const int a = root(label[p]), b = root(label[q]);
+        if (a != b && std::max(a, b) >= maxRegions) parent[std::max(a, b)] = std::min(a, b);
+    };
+    for (int p = 0; p < n; ++p) {
+        if (p % w + 1 < w) join(p, p + 1);
+        if (p / w + 1 < h) join(p, p + w);
+    }
+    for (int p = 0; p < n; ++p) label[p] = root(label[p]);
+    return maxRegions;
+}
+
+// Rows of descentRow that differ from the reference; the first and last rows
+// against a wall of 255, as the watershed passes them.
+int descentRowsDiffering(const std::vector<std::uint8_t>& g, int w, int h)
+{
+    const std::vector<std::uint8_t> wall(w, 255);
+    std::vector<std::uint8_t> fast(w), reference(w);
+    int differing = 0;
+    for (int y = 0; y < h; ++y) {
+        const std::uint8_t* up = y > 0 ? &g[(y - 1) * w] : wall.data();
+        const std::uint8_t* down = y + 1 < h ? &g[(y + 1) * w] : wall.data();
+        descentRow(up, &g[y * w], down, w, fast.data());
+        descentRowReference(up, &g[y * w], down, w, reference.data());
+        differing += fast != reference;
+    }
+    return differing;
+}
+
+std::vector<std::uint8_t> randomLevels(int w, int h, int lowest, int count, std::mt19937& rng)
+{
+    std::vector<std::uint8_t> g(static_cast<std::size_t>(w) * h);
+    for (std::uint8_t& v : g) v = static_cast<std::uint8_t>(lowest + static_cast<int>(rng() % count));
+    return g;
+}
+
+TEST(DecoderKernels, DescentRowMatchesReferenceOnRandomRowsOfEveryWidth)
+{
+    // Widths around the 16-pixel NEON block; the full byte range, three low
+    // levels (ties in every direction) and the top three (ties with the wall).
+    std::mt19937 rng(21);
+    for (int width : {1, 2, 3, 4, 15, 16, 17, 18, 19, 33, 47, 64, 781})
+        for (const auto& [lowest, count] : {std::pair{0, 256}, std::pair{0, 3}, std::pair{253, 3}})
+            EXPECT_EQ(descentRowsDiffering(randomLevels(width, 6, lowest, count, rng), width, 6), 0)
+                << "width " << width << ", levels from " << lowest;
+}
+
+// computeWatershed on a given gradient image, in a workspace sized as
+// Decoder::create() sizes it.
+struct Basins {
+    std::vector<std::int32_t> labels;
+    int regions = 0;
+    bool truncated = false;
+};
+Basins watershedOf(const std::vector<std::uint8_t>& g, int w, int h, int maxRegions)
+{
+    DecoderWorkspace ws(StripePattern::generate(40, 4, 8, 7).value(), DecoderParams{});
+    const std::size_t n = g.size();
+    ws.width = w;
+    ws.height = h;
+    ws.maxRegions = maxRegions;
+    ws.gradient = std::make_unique<std::uint8_t[]>(n);
+    std::copy(g.begin(), g.end(), ws.gradient.get());
+    ws.labels = std::make_unique<std::int32_t[]>(n);
+    ws.orderAndPoints = std::make_unique<std::byte[]>(4 * n);
+    ws.pixelOrder = reinterpret_cast<std::int32_t*>(ws.orderAndPoints.get());
+    ws.scratch = std::make_unique<std::int32_t[]>(scratchEntries(w, h, maxRegions, 3 * maxRegions));
+    computeWatershed(ws);
+    return {std::vector<std::int32_t>(ws.labels.get(), ws.labels.get() + n), ws.regionCount, ws.truncated};
+}
+
+TEST(DecoderKernels, WatershedSplitsAPlateauHalfwayBetweenItsWaysDown)
+{
+    // A ridge plateau between two minima, along a row and along a column: the
+    // pixels drain to the nearer end; the middle of an odd one to the basin
+    // reached first in raster order.
+    const std::vector<std::uint8_t> even{0, 5, 5, 5, 5, 5, 5, 0}, odd{0, 5, 5, 5, 5, 5, 0};
+    EXPECT_EQ(watershedOf(even, 8, 1, 8).labels, (std::vector<std::int32_t>{0, 0, 0, 0, 1, 1, 1, 1}));
+    EXPECT_EQ(watershedOf(even, 1, 8, 8).labels, (std::vector<std::int32_t>{0, 0, 0, 0, 1, 1, 1, 1}));
+    EXPECT_EQ(watershedOf(odd, 7, 1, 7).labels, (std::vector<std::int32_t>{0, 0, 0, 0, 1, 1, 1}));
+    // Capacity 1: the higher minimum (level 2, first in raster order) is merged.
+    const Basins one = watershedOf({2, 5, 5, 0}, 4, 1, 1);
+    EXPECT_EQ(one.labels, (std::vector<std::int32_t>{0, 0, 0, 0}));
+    EXPECT_EQ(one.regions, 1);
+    EXPECT_TRUE(one.truncated);
+}
+
+TEST(DecoderKernels, WatershedMatchesReferenceOnTinyAndTerracedImages)
+{
+    // Terraces of 4 levels (plateaus everywhere) and the full byte range, with
+    // room for every minimum and with capacity 3.
+    std::mt19937 rng(22);
+    int truncatedCases = 0;
+    for (const auto& [w, h] : {std::pair{1, 1}, std::pair{1, 2}, std::pair{2, 1}, std::pair{2, 2}, std::pair{1, 37},
+                              std::pair{37, 1}, std::pair{2, 33}, std::pair{33, 2}, std::pair{40, 30}})
+        for (const int count : {4, 256})
+            for (const int maxRegions : {w * h, 3}) {
+                const std::vector<std::uint8_t> g = randomLevels(w, h, 0, count, rng);
+                std::vector<std::int32_t> reference;
+                const int minima = referenceWatershed(g.data(), w, h, w * h, reference);
+                const int regions = referenceWatershed(g.data(), w, h, maxRegions, reference);
+                const Basins fast = watershedOf(g, w, h, maxRegions);
+                EXPECT_EQ(fast.labels, reference) << w << "x" << h << ", " << count << " levels, capacity " << maxRegions;
+                EXPECT_EQ(fast.regions, regions);
+                EXPECT_EQ(fast.truncated, minima > maxRegions);
+                truncatedCases += fast.truncated;
+            }
+    EXPECT_GE(truncatedCases, 6);  // the capacity is exceeded in most of the larger images
 }
 
 // The region statistics as first written: each region's pixels gathered in
