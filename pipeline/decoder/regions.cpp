@@ -5,19 +5,20 @@
 // at its border): the value at index size / 2 of its sorted values, then
 // corrected for camera crosstalk.
 //
-// Linear time, no per-region sorting: per channel, the labels of all pixels
-// are counting-sorted by the pixel's value into pixelOrder (reusing the
-// watershed's order buffer); sweeping that order from value 0 up, a region's
-// median is the value at which its (size / 2 + 1)-th pixel arrives. The sweep
-// touches one int32 counter per region (L1-resident) and the sorted labels in
-// sequence. Pixel counts and coordinate sums come from one raster pass over
-// the runs of equal labels in each row, together with the three value
-// histograms the counting sorts start from.
+// Two raster passes over the runs of equal labels in each row (their ends
+// from borderMask, without a branch per pixel): the first counts each
+// region's pixels and sums their coordinates; the second, with the counts as
+// offsets (a counting sort by label), copies each run's pixels, 4 bytes each,
+// into the watershed's order buffer, where each region's pixels then lie
+// together (a region's runs arrive in order, so its write position moves
+// through one cache line at a time). Each region's medians are then
+// selected from its own few hundred bytes, in L1 (channelMedians, simd.hpp).
 #include "pipeline/decoder/simd.hpp"
 #include "pipeline/decoder/workspace.hpp"
 
 #include <algorithm>
-#include <array>
+#include <bit>
+#include <cstring>
 
 namespace stria::pipeline {
 
@@ -35,56 +36,66 @@ void computeRegions(DecoderWorkspace& ws)
     for (int r = 0; r < count; ++r) regions[r] = Region{};
     // Compact per-region arrays in the scratch (the Region records are 64
     // bytes apart): coordinate sums, then a counter, first of pixels and
-    // then, per channel, of the pixels left before the median.
+    // then the position of the region's next pixel.
     auto* sums = reinterpret_cast<std::int64_t*>(ws.scratch.get());  // x, y per region
     auto* counter = reinterpret_cast<std::int32_t*>(sums + 2 * static_cast<std::ptrdiff_t>(count));
     std::fill(sums, sums + 2 * static_cast<std::ptrdiff_t>(count), 0);
     std::fill(counter, counter + count, 0);
 
-    std::array<ValueHistogram, 3> histogram{};
-    for (int y = 0; y < h; ++y) {
-        const std::int32_t* row = label + static_cast<std::ptrdiff_t>(y) * w;
-        for (int x = 0; x < w;) {
-            const std::int32_t r = row[x];
-            int end = x + 1;
-            while (end < w && row[end] == r) ++end;
-            const std::int64_t length = end - x;
-            counter[r] += static_cast<std::int32_t>(length);
-            sums[2 * r] += (x + end - 1) * length / 2;
-            sums[2 * r + 1] += y * length;
-            x = end;
+    // Calls run(x, end, y, r) for each run [x, end) of label r in row y.
+    auto forEachRun = [&](auto run) {
+        for (int y = 0; y < h; ++y) {
+            const std::int32_t* row = label + static_cast<std::ptrdiff_t>(y) * w;
+            int x = 0;
+            for (int x0 = 0; x0 + 1 < w; x0 += 64)
+                for (std::uint64_t ends = borderMask(row + x0, row + x0 + 1, std::min(64, w - 1 - x0)); ends;
+                     ends &= ends - 1) {
+                    const int end = x0 + std::countr_zero(ends) + 1;
+                    run(x, end, y, row[x]);
+                    x = end;
+                }
+            run(x, w, y, row[x]);
         }
-        channelHistograms(ws.frame.row(y), w, ws.rgbOffset, histogram);
-    }
+    };
+    forEachRun([&](int x, int end, int y, std::int32_t r) {
+        const std::int64_t length = end - x;
+        counter[r] += static_cast<std::int32_t>(length);
+        sums[2 * r] += (x + end - 1) * length / 2;
+        sums[2 * r + 1] += y * length;
+    });
+    std::int32_t offset = 0;
     for (int r = 0; r < count; ++r) {
         regions[r].pixelCount = counter[r];
         const double size = counter[r];
         regions[r].centroidX = static_cast<float>(static_cast<double>(sums[2 * r]) / size);
         regions[r].centroidY = static_cast<float>(static_cast<double>(sums[2 * r + 1]) / size);
+        counter[r] = offset;
+        offset += regions[r].pixelCount;
     }
 
-    std::int32_t* byValue = ws.pixelOrder;
-    for (int c = 0; c < 3; ++c) {
-        std::array<std::int32_t, 257> start;
-        start[0] = 0;
-        for (int v = 0; v < 256; ++v) start[v + 1] = start[v] + histogram[c][v];
-        std::array<std::int32_t, 256> cursor;
-        std::copy(start.begin(), start.begin() + 256, cursor.begin());
-        for (int y = 0; y < h; ++y)
-            scatterLabelsByValue(ws.frame.row(y) + ws.rgbOffset[c], label + static_cast<std::ptrdiff_t>(y) * w, w,
-                                 cursor.data(), byValue);
-        for (int r = 0; r < count; ++r) counter[r] = regions[r].pixelCount / 2 + 1;
-        for (int v = 0; v < 256; ++v) {
-#pragma GCC unroll 4
-            for (int i = start[v]; i < start[v + 1]; ++i)
-                if (--counter[byValue[i]] == 0) regions[byValue[i]].color[c] = static_cast<float>(v);
-        }
-    }
+    // A pixel's 3 bytes and the next one in 4 bytes (the frame's last pixel
+    // has no next byte: 3 copied).
+    auto* sorted = reinterpret_cast<std::uint32_t*>(ws.pixelOrder);
+    forEachRun([&](int x, int end, int y, std::int32_t r) {
+        const std::uint8_t* pixel = ws.frame.row(y) + 3 * x;
+        std::uint32_t* out = sorted + counter[r];
+        counter[r] += end - x;
+        const int whole = y + 1 == h && end == w ? end - 1 : end;
+        for (int i = x; i < whole; ++i, pixel += 3) std::memcpy(out++, pixel, 4);
+        if (whole < end) std::memcpy(out, pixel, 3);
+    });
 
+    // channelMedians reads up to 3 pixels past a region's last: the last
+    // regions take the reference.
+    const std::ptrdiff_t n = static_cast<std::ptrdiff_t>(w) * h;
     const cv::Matx33f& m = ws.colorCorrection;
     for (int r = 0; r < count; ++r) {
-        const std::array<float, 3>& median = regions[r].color;
-        const cv::Vec3f corrected = m * cv::Vec3f(median[0], median[1], median[2]);
+        const int size = regions[r].pixelCount;
+        const std::int32_t first = counter[r] - size;
+        const std::array<std::uint8_t, 3> byByte = first + size + 3 <= n ? channelMedians(sorted + first, size)
+                                                                          : channelMediansReference(sorted + first, size);
+        const cv::Vec3f median(byByte[ws.rgbOffset[0]], byByte[ws.rgbOffset[1]], byByte[ws.rgbOffset[2]]);
+        const cv::Vec3f corrected = m * median;
         regions[r].color = {corrected[0], corrected[1], corrected[2]};
     }
 }

@@ -41,24 +41,17 @@ void projectedGradientsReference(const std::uint8_t* row, int first, int count, 
 void projectedGradients(const std::uint8_t* row, int first, int count, const std::array<int, 3>& rgbOffset,
                         const cv::Matx33f& m, const cv::Vec3f& weight, float* out);
 
-// Region colour statistics (regions.cpp). A 256-bin count of byte values.
-using ValueHistogram = std::array<std::int32_t, 256>;
-// Adds one BGR/RGB row's values to the R, G, B histograms (rgbOffset: byte
-// offset of R, G, B within a pixel).
-void channelHistogramsReference(const std::uint8_t* row, int width, const std::array<int, 3>& rgbOffset,
-                                std::array<ValueHistogram, 3>& histogram);
-void channelHistograms(const std::uint8_t* row, int width, const std::array<int, 3>& rgbOffset,
-                       std::array<ValueHistogram, 3>& histogram);
-// One row of the counting sort of labels by value: for each pixel x, in order,
-// out[cursor[v]++] = labels[x] where v = values[3 * x] (one channel of the row).
-void scatterLabelsByValueReference(const std::uint8_t* values, const std::int32_t* labels, int width,
-                                   std::int32_t* cursor, std::int32_t* out);
-void scatterLabelsByValue(const std::uint8_t* values, const std::int32_t* labels, int width, std::int32_t* cursor,
-                          std::int32_t* out);
+// Region colours (regions.cpp): per byte k < 3 of count >= 1 pixels of 4
+// bytes (a frame pixel's 3 and one more), the median of the pixels' byte k:
+// the value at index count / 2 of them sorted. channelMedians reads whole
+// blocks of 4 pixels: up to 3 pixels past the last must be readable.
+std::array<std::uint8_t, 3> channelMediansReference(const std::uint32_t* pixels, int count);
+std::array<std::uint8_t, 3> channelMedians(const std::uint32_t* pixels, int count);
 
-// Region graph (graph.cpp). Bit i of the result is set where a[i] != b[i],
-// for i < count <= 64: with b = a + 1 the borders between horizontal
-// neighbours of a label row, with b = a + width those to the row below.
+// Region statistics and graph (regions.cpp, graph.cpp). Bit i of the result
+// is set where a[i] != b[i], for i < count <= 64: with b = a + 1 the borders
+// between horizontal neighbours of a label row (the ends of its runs), with
+// b = a + width those to the row below.
 std::uint64_t borderMaskReference(const std::int32_t* a, const std::int32_t* b, int count);
 std::uint64_t borderMask(const std::int32_t* a, const std::int32_t* b, int count);
 // Eq. 8's terms of one border pixel pair: the image gradient at the pair's

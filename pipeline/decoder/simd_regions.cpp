@@ -1,89 +1,102 @@
-// Region colour statistics kernels (pipeline/decoder/simd.hpp).
+// Region colour statistics kernel (pipeline/decoder/simd.hpp).
 #include "pipeline/decoder/simd.hpp"
 
 #if defined(__ARM_NEON)
 #include <arm_neon.h>
+#elif defined(__SSE2__)
+#include <emmintrin.h>
 #endif
 
 namespace stria::pipeline {
 
-void channelHistogramsReference(const std::uint8_t* row, int width, const std::array<int, 3>& rgbOffset,
-                                std::array<ValueHistogram, 3>& histogram)
+std::array<std::uint8_t, 3> channelMediansReference(const std::uint32_t* pixels, int count)
 {
-    for (int x = 0; x < width; ++x)
-        for (int c = 0; c < 3; ++c) ++histogram[c][row[3 * x + rgbOffset[c]]];
+    const auto* bytes = reinterpret_cast<const std::uint8_t*>(pixels);
+    std::array<std::uint8_t, 3> median{};
+    for (int k = 0; k < 3; ++k) {
+        std::array<std::int32_t, 256> histogram{};
+        for (int i = 0; i < count; ++i) ++histogram[bytes[4 * i + k]];
+        int v = 0;
+        for (int seen = histogram[0]; seen <= count / 2; seen += histogram[++v]) {}
+        median[k] = static_cast<std::uint8_t>(v);
+    }
+    return median;
 }
 
+#if defined(__ARM_NEON) || defined(__SSE2__)
 namespace {
 
-// The reference's loops with the offsets in registers and the counts known
-// not to alias the row (the reference reloads both after every increment).
-void channelHistogramsScalar(const std::uint8_t* row, int width, const std::array<int, 3>& rgbOffset,
-                             std::array<ValueHistogram, 3>& histogram)
+// From byte 16 - k on: k lanes of 0xff, then zeros.
+alignas(16) constexpr std::uint8_t kLeadingLanes[32] = {255, 255, 255, 255, 255, 255, 255, 255,
+                                                       255, 255, 255, 255, 255, 255, 255, 255};
+
+// Per byte k < 3 of the pixels (blocks whole blocks of 4, then the bytes of
+// the next block where restLanes is set), how many are below t[k]
+// (1 <= t[k] <= 255). blocks <= 254: the per-lane byte counters cannot
+// overflow.
+#if defined(__ARM_NEON)
+using Bytes = uint8x16_t;
+inline Bytes loadBytes(const std::uint8_t* p) { return vld1q_u8(p); }
+
+inline std::array<int, 3> countBelow(const std::uint8_t* bytes, int blocks, Bytes restLanes, const std::array<int, 3>& t)
 {
-    const std::uint8_t* __restrict r = row + rgbOffset[0];
-    const std::uint8_t* __restrict g = row + rgbOffset[1];
-    const std::uint8_t* __restrict b = row + rgbOffset[2];
-    std::int32_t* __restrict hr = histogram[0].data();
-    std::int32_t* __restrict hg = histogram[1].data();
-    std::int32_t* __restrict hb = histogram[2].data();
-    for (int x = 0; x < width; ++x) {
-        ++hr[r[3 * x]];
-        ++hg[g[3 * x]];
-        ++hb[b[3 * x]];
-    }
+    const Bytes limit = vreinterpretq_u8_u32(vdupq_n_u32(static_cast<std::uint32_t>(t[0] | t[1] << 8 | t[2] << 16)));
+    Bytes counts = vshrq_n_u8(vandq_u8(vcltq_u8(vld1q_u8(bytes + 16 * blocks), limit), restLanes), 7);
+#pragma GCC unroll 2
+    for (int b = 0; b < blocks; ++b) counts = vsubq_u8(counts, vcltq_u8(vld1q_u8(bytes + 16 * b), limit));
+    // The four pixels' counters of each byte position added.
+    const uint16x8_t pairs = vaddl_u8(vget_low_u8(counts), vget_high_u8(counts));
+    const uint16x4_t sums = vadd_u16(vget_low_u16(pairs), vget_high_u16(pairs));
+    return {vget_lane_u16(sums, 0), vget_lane_u16(sums, 1), vget_lane_u16(sums, 2)};
 }
+#else
+using Bytes = __m128i;
+inline Bytes loadBytes(const std::uint8_t* p) { return _mm_loadu_si128(reinterpret_cast<const __m128i*>(p)); }
+
+// x < t as max(x, t - 1) == t - 1 (SSE2 has no unsigned byte comparison).
+inline __m128i belowMask(const std::uint8_t* x, __m128i limit)
+{
+    return _mm_cmpeq_epi8(_mm_max_epu8(loadBytes(x), limit), limit);
+}
+
+inline std::array<int, 3> countBelow(const std::uint8_t* bytes, int blocks, Bytes restLanes, const std::array<int, 3>& t)
+{
+    const __m128i limit = _mm_set1_epi32((t[0] - 1) | (t[1] - 1) << 8 | (t[2] - 1) << 16);
+    const __m128i zero = _mm_setzero_si128();
+    __m128i counts = _mm_sub_epi8(zero, _mm_and_si128(belowMask(bytes + 16 * blocks, limit), restLanes));
+#pragma GCC unroll 2
+    for (int b = 0; b < blocks; ++b) counts = _mm_sub_epi8(counts, belowMask(bytes + 16 * b, limit));
+    // The four pixels' counters of each byte position added.
+    __m128i sums = _mm_add_epi16(_mm_unpacklo_epi8(counts, zero), _mm_unpackhi_epi8(counts, zero));
+    sums = _mm_add_epi16(sums, _mm_srli_si128(sums, 8));
+    return {_mm_extract_epi16(sums, 0), _mm_extract_epi16(sums, 1), _mm_extract_epi16(sums, 2)};
+}
+#endif
 
 }  // namespace
+#endif
 
-void channelHistograms(const std::uint8_t* row, int width, const std::array<int, 3>& rgbOffset,
-                       std::array<ValueHistogram, 3>& histogram)
+std::array<std::uint8_t, 3> channelMedians(const std::uint32_t* pixels, int count)
 {
-    int x = 0;
-#if defined(__ARM_NEON)
-    // vld3 de-interleaves 16 pixels into byte planes; the counting itself
-    // stays scalar (a histogram has no vector form), but from unit-stride
-    // planes without per-pixel offset arithmetic.
-    std::array<ValueHistogram*, 3> byByte;
-    for (int c = 0; c < 3; ++c) byByte[rgbOffset[c]] = &histogram[c];
-    alignas(16) std::uint8_t planes[3][16];
-    for (; x + 16 <= width; x += 16) {
-        const uint8x16x3_t v = vld3q_u8(row + 3 * x);
-        for (int k = 0; k < 3; ++k) vst1q_u8(planes[k], v.val[k]);
-        for (int k = 0; k < 3; ++k)
-            for (int i = 0; i < 16; ++i) ++(*byByte[k])[planes[k][i]];
+#if defined(__ARM_NEON) || defined(__SSE2__)
+    if (const int blocks = count / 4; blocks <= 254) {
+        // The median m = values sorted[count / 2] is the largest t with at
+        // most count / 2 values below t: found bit by bit from the top, each
+        // step one counting pass over the pixels (4 pixels' 3 channels per
+        // compare, no branch per value; a region's ~256 bytes stay in L1
+        // for the 8 passes).
+        const auto* bytes = reinterpret_cast<const std::uint8_t*>(pixels);
+        const Bytes restLanes = loadBytes(kLeadingLanes + 16 - 4 * (count - 4 * blocks));
+        std::array<int, 3> m{};
+        for (int bit = 128; bit > 0; bit >>= 1) {
+            const std::array<int, 3> below = countBelow(bytes, blocks, restLanes, {m[0] | bit, m[1] | bit, m[2] | bit});
+            for (int k = 0; k < 3; ++k) m[k] |= below[k] <= count / 2 ? bit : 0;
+        }
+        return {static_cast<std::uint8_t>(m[0]), static_cast<std::uint8_t>(m[1]), static_cast<std::uint8_t>(m[2])};
     }
 #endif
-    channelHistogramsScalar(row + 3 * x, width - x, rgbOffset, histogram);
-}
-
-void scatterLabelsByValueReference(const std::uint8_t* values, const std::int32_t* labels, int width,
-                                   std::int32_t* cursor, std::int32_t* out)
-{
-    for (int x = 0; x < width; ++x) out[cursor[values[3 * x]]++] = labels[x];
-}
-
-void scatterLabelsByValue(const std::uint8_t* values, const std::int32_t* labels, int width, std::int32_t* cursor,
-                          std::int32_t* out)
-{
-    int x = 0;
-#if defined(__ARM_NEON)
-    // vld3 picks the channel's 16 values (plane 0 of the de-interleaved
-    // bytes from `values`); its 48 bytes end at values[3 * x + 47], within
-    // the row while x + 17 <= width. The scatter stays scalar.
-    alignas(16) std::uint8_t plane[16];
-    for (; x + 17 <= width; x += 16) {
-        vst1q_u8(plane, vld3q_u8(values + 3 * x).val[0]);
-        for (int i = 0; i < 16; ++i) out[cursor[plane[i]]++] = labels[x + i];
-    }
-#endif
-    // __restrict: otherwise every store to out could change the cursors.
-    const std::uint8_t* __restrict v = values;
-    const std::int32_t* __restrict l = labels;
-    std::int32_t* __restrict c = cursor;
-    std::int32_t* __restrict o = out;
-#pragma GCC unroll 4
-    for (; x < width; ++x) o[c[v[3 * x]]++] = l[x];
+    // Large regions: a histogram's fixed cost is small per value.
+    return channelMediansReference(pixels, count);
 }
 
 }  // namespace stria::pipeline

@@ -81,7 +81,7 @@ struct DecoderWorkspace {
     std::unique_ptr<std::uint8_t[]> gradient;
     std::unique_ptr<std::int32_t[]> labels;
     // One buffer, three uses in turn: the watershed's plateau queue and
-    // union-find parents, then labels by channel value (regions), then the
+    // union-find parents, then pixels sorted by label (regions), then the
     // output points (depth).
     // Points are 24 bytes, so maxPoints = pixels / 6 fits exactly.
     std::unique_ptr<std::byte[]> orderAndPoints;

@@ -119,51 +119,42 @@ TEST(DecoderKernels, EdgeLocationGradientsEqualReferenceOnSimulatorFrame)
     EXPECT_EQ(projectedGradientsDiffering(relief, crosstalk.inv(), rng), 0);
 }
 
-// Rows whose region statistics kernels (channel histograms, labels scattered
-// by value) differ from the references, over both byte orders.
-int regionKernelRowsDiffering(const cv::Mat& frame, unsigned seed)
+// Region medians whose fast selection differs from the reference: every
+// count up to 70 (around the 4-pixel blocks, and the tail alone) and a few
+// up to 3000 (past the 254 blocks the fast path takes), of random bytes, of
+// few distinct values (ties at the median) and of the extremes 0 and 255.
+int regionMediansDiffering(unsigned seed)
 {
-    const int w = frame.cols;
     std::mt19937 rng(seed);
-    std::vector<std::int32_t> labels(w);
+    std::vector<std::uint32_t> pixels(3000 + 3);
     int differing = 0;
-    for (const std::array<int, 3> rgbOffset : {std::array<int, 3>{2, 1, 0}, std::array<int, 3>{0, 1, 2}})
-        for (int y = 0; y < frame.rows; ++y) {
-            for (std::int32_t& l : labels) l = static_cast<std::int32_t>(rng() % 5000);
-            std::array<ValueHistogram, 3> fast{}, reference{};
-            channelHistograms(frame.ptr(y), w, rgbOffset, fast);
-            channelHistogramsReference(frame.ptr(y), w, rgbOffset, reference);
-            differing += fast != reference;
-            for (int c = 0; c < 3; ++c) {
-                // Cursors from the row's own histogram, so every slot is written.
-                std::array<std::int32_t, 256> cursor, refCursor;
-                std::int32_t sum = 0;
-                for (int v = 0; v < 256; ++v) {
-                    cursor[v] = refCursor[v] = sum;
-                    sum += reference[c][v];
-                }
-                std::vector<std::int32_t> out(w, -1), refOut(w, -1);
-                const std::uint8_t* values = frame.ptr(y) + rgbOffset[c];
-                scatterLabelsByValue(values, labels.data(), w, cursor.data(), out.data());
-                scatterLabelsByValueReference(values, labels.data(), w, refCursor.data(), refOut.data());
-                differing += out != refOut || cursor != refCursor;
+    auto compare = [&](int count) {
+        differing += channelMedians(pixels.data(), count) != channelMediansReference(pixels.data(), count);
+    };
+    for (int count : {1, 2, 3, 4, 5, 63, 64, 65, 1016, 1019, 1020, 3000})
+        for (int kind = 0; kind < 3; ++kind) {
+            for (int i = 0; i < count; ++i) {
+                const std::uint32_t v = rng();
+                pixels[i] = kind == 0 ? v : kind == 1 ? 0x64646464u + (v & 0x01010101u) : (v & 0x01010101u) * 255;
             }
+            compare(count);
+        }
+    for (int count = 1; count <= 70; ++count)
+        for (int trial = 0; trial < 20; ++trial) {
+            for (int i = 0; i < count; ++i) pixels[i] = rng();
+            compare(count);
         }
     return differing;
 }
 
-TEST(DecoderKernels, RegionStatisticsKernelsMatchReferenceOnRandomRowsOfEveryWidth)
+TEST(DecoderKernels, RegionMediansMatchReference)
 {
-    // Widths around the 16-pixel NEON block (the scatter's needs one pixel more).
-    for (int width : {1, 2, 15, 16, 17, 18, 31, 32, 33, 34, 781})
-        EXPECT_EQ(regionKernelRowsDiffering(randomFrame(width, 4, 100u + width), 7u), 0) << "width " << width;
-}
-
-TEST(DecoderKernels, RegionStatisticsKernelsMatchReferenceOnSimulatorFrame)
-{
-    const cv::Mat frame = renderFrame(hal::sim::SceneKind::TexturedRelief, hal::sim::Albedo::Photo, 4);
-    ASSERT_FALSE(frame.empty());
-    EXPECT_EQ(regionKernelRowsDiffering(frame, 8u), 0);
+    EXPECT_EQ(regionMediansDiffering(7u), 0);
+    // The reference itself: byte k's value at index count / 2 of the sorted.
+    const std::array<std::uint32_t, 6> pixels{0x000109u, 0x010203u, 0x0203c8u, 0x030403u, 0x040507u, 0x0506ffu};
+    EXPECT_EQ(channelMediansReference(pixels.data(), 6), (std::array<std::uint8_t, 3>{9, 4, 3}));
+    EXPECT_EQ(channelMediansReference(pixels.data(), 5), (std::array<std::uint8_t, 3>{7, 3, 2}));
+    EXPECT_EQ(channelMediansReference(pixels.data(), 1), (std::array<std::uint8_t, 3>{9, 1, 0}));
 }
 
 // Border masks and border pair gradients that differ (bitwise) from the
@@ -583,6 +574,19 @@ TEST(DecoderKernels, WatershedRegionsAndGraphMatchReferencesOnNoiseAndWhenTrunca
     EXPECT_EQ(truncated.differingGraphEdges(), 0);
     truncated.ws.rgbOffset = {0, 1, 2};
     EXPECT_EQ(truncated.differingRegions(), 0);
+}
+
+TEST(DecoderKernels, RegionsAndGraphMatchReferencesOnTinyImages)
+{
+    // Rows and columns shorter than the kernels' blocks; the frame's last
+    // pixel has no byte after it; regions within 3 pixels of the sorted
+    // buffer's end take the reference medians.
+    for (const auto& [width, height] : {std::pair{1, 1}, {1, 7}, {7, 1}, {2, 2}, {3, 5}, {17, 3}, {66, 2}}) {
+        FloodCase c(randomFrame(width, height, 40u + width * height), width * height);
+        c.differingLabels();
+        EXPECT_EQ(c.differingRegions(), 0) << width << "x" << height;
+        EXPECT_EQ(c.differingGraphEdges(), 0) << width << "x" << height;
+    }
 }
 
 }  // namespace
