@@ -101,7 +101,8 @@ struct DecoderWorkspace {
     int maxOpen = 0;
     std::unique_ptr<OpenEntry[]> open;          // heap, maxOpen entries
     int openCount = 0;
-    std::unique_ptr<std::int32_t[]> candidates;  // seeding: candidate pattern positions (edgeCount)
+    std::unique_ptr<std::int32_t[]> candidates;  // seeding: candidate pattern positions (edgeCount);
+                                                 // depth: each edge's point in the current row
     std::unique_ptr<std::int32_t[]> pathVertices;  // seeding: the path, window + 1 regions
     std::unique_ptr<std::int32_t[]> componentSize;  // per pass (<= maxRegions)
 
