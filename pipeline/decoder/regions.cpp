@@ -81,6 +81,7 @@ void computeRegions(DecoderWorkspace& ws)
         std::uint32_t* out = sorted + counter[r];
         counter[r] += end - x;
         const int whole = y + 1 == h && end == w ? end - 1 : end;
+#pragma GCC unroll 4
         for (int i = x; i < whole; ++i, pixel += 3) std::memcpy(out++, pixel, 4);
         if (whole < end) std::memcpy(out, pixel, 3);
     });
