@@ -21,7 +21,9 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
+#include <cstdint>
 
 namespace stria::pipeline {
 namespace {
@@ -92,74 +94,80 @@ void computePoints(DecoderWorkspace& ws)
         const std::uint8_t* row = ws.frame.row(y);
         const RowRays rays(ws, y);
         std::fill(rowPoint, rowPoint + edgeCount, -1);
-        for (int x = 0; x + 1 < w; ++x) {
-            if (label[x] == label[x + 1]) continue;
-            const int leftStripe = stripes[label[x]], rightStripe = stripes[label[x + 1]];
-            if (leftStripe < 0 || rightStripe < 0 || std::abs(leftStripe - rightStripe) != 1) continue;
-            const Region& left = regions[label[x]];
-            const Region& right = regions[label[x + 1]];
-            const int edge = std::min(leftStripe, rightStripe);
-            // Weights per channel: expected sign / range, walking left to right.
-            const std::array<std::int8_t, 3>& sign = kSymbolSigns[ws.pattern.edgeSymbol(edge)];
-            const float orientation = rightStripe > leftStripe ? 1.0f : -1.0f;
-            cv::Vec3f weight;
-            for (int c = 0; c < 3; ++c)
-                weight[c] = orientation * static_cast<float>(sign[c]) / std::max(0.5f * (left.range[c] + right.range[c]), 1.0f);
-            // Projected gradient at half-pixel positions i + 0.5, i in
-            // [lo, hi]: every sample both searches below can read. The last
-            // one is read only by the centroid of a peak at x + kSearchRadius:
-            // it is computed then, so most edges take 8 samples (two kernel
-            // steps of 4) rather than 9 (three).
-            const int lo = std::max(x - 2 * kSearchRadius, 0), hi = std::min(x + 2 * kSearchRadius, w - 2);
-            std::array<float, 4 * kSearchRadius + 1> samples;
-            const bool lastLater = hi - lo + 1 == static_cast<int>(samples.size());
-            projectedGradients(row, lo, hi - lo + 1 - lastLater, ws.rgbOffset, m, weight, samples.data());
-            auto gradientAt = [&](int i) { return samples[i - lo]; };
-            int peak = x;
-            float peakValue = gradientAt(x);
-            for (int i = std::max(x - kSearchRadius, 0); i <= std::min(x + kSearchRadius, w - 2); ++i) {
-                const float g = gradientAt(i);
-                const bool higher = g > peakValue;  // selects, not a branch: which sample wins is noise
-                peak = higher ? i : peak;
-                peakValue = higher ? g : peakValue;
+        // Label changes 64 at a time (borderMask), without a branch per
+        // pixel: whether two neighbours share a label is noise to a branch
+        // predictor (it mispredicted 85 000 times per 780x580 frame).
+        for (int x0 = 0; x0 + 1 < w; x0 += 64) {
+            for (std::uint64_t changes = borderMask(label + x0, label + x0 + 1, std::min(64, w - 1 - x0)); changes;
+                 changes &= changes - 1) {
+                const int x = x0 + std::countr_zero(changes);
+                const int leftStripe = stripes[label[x]], rightStripe = stripes[label[x + 1]];
+                if (leftStripe < 0 || rightStripe < 0 || std::abs(leftStripe - rightStripe) != 1) continue;
+                const Region& left = regions[label[x]];
+                const Region& right = regions[label[x + 1]];
+                const int edge = std::min(leftStripe, rightStripe);
+                // Weights per channel: expected sign / range, walking left to right.
+                const std::array<std::int8_t, 3>& sign = kSymbolSigns[ws.pattern.edgeSymbol(edge)];
+                const float orientation = rightStripe > leftStripe ? 1.0f : -1.0f;
+                cv::Vec3f weight;
+                for (int c = 0; c < 3; ++c)
+                    weight[c] = orientation * static_cast<float>(sign[c]) / std::max(0.5f * (left.range[c] + right.range[c]), 1.0f);
+                // Projected gradient at half-pixel positions i + 0.5, i in
+                // [lo, hi]: every sample both searches below can read. The last
+                // one is read only by the centroid of a peak at x + kSearchRadius:
+                // it is computed then, so most edges take 8 samples (two kernel
+                // steps of 4) rather than 9 (three).
+                const int lo = std::max(x - 2 * kSearchRadius, 0), hi = std::min(x + 2 * kSearchRadius, w - 2);
+                std::array<float, 4 * kSearchRadius + 1> samples;
+                const bool lastLater = hi - lo + 1 == static_cast<int>(samples.size());
+                projectedGradients(row, lo, hi - lo + 1 - lastLater, ws.rgbOffset, m, weight, samples.data());
+                auto gradientAt = [&](int i) { return samples[i - lo]; };
+                int peak = x;
+                float peakValue = gradientAt(x);
+                for (int i = std::max(x - kSearchRadius, 0); i <= std::min(x + kSearchRadius, w - 2); ++i) {
+                    const float g = gradientAt(i);
+                    const bool higher = g > peakValue;  // selects, not a branch: which sample wins is noise
+                    peak = higher ? i : peak;
+                    peakValue = higher ? g : peakValue;
+                }
+                // The peak must lie inside the search window with its whole
+                // centroid window in the image: an edge whose profile the image
+                // border cuts off cannot be located.
+                if (!(peakValue > 0) || peak - kSearchRadius < 0 || peak + kSearchRadius > w - 2) continue;
+                if (lastLater && peak == x + kSearchRadius)
+                    projectedGradients(row, hi, 1, ws.rgbOffset, m, weight, &samples[hi - lo]);
+                // Centroid of the peak's samples above a quarter of its height:
+                // averages the noise over ~3 samples, and the threshold keeps the
+                // tails of the neighbouring stripe edges out.
+                // Branch-free (the test above keeps the window in the image): a
+                // sample below the threshold adds a zero, which leaves the sums
+                // as they are, bit for bit (they start at +0 and are never -0).
+                float sum = 0, moment = 0;
+                for (int i = peak - kSearchRadius; i <= peak + kSearchRadius; ++i) {
+                    const float g = std::max(gradientAt(i) - kCentroidThreshold * peakValue, 0.0f);
+                    sum += g;
+                    moment += g * static_cast<float>(i - peak);
+                }
+                const float offset = moment / sum;
+                const double u = peak + 0.5 + offset;
+                const auto point = RigModel::intersectRay(rays.at(u), ws.lightPlanes[edge]);
+                if (!point) continue;
+                const ScanPoint scanPoint{cv::Vec3f(static_cast<float>((*point)[0]), static_cast<float>((*point)[1]),
+                                                    static_cast<float>((*point)[2])),
+                                          cv::Point2f(static_cast<float>(u), static_cast<float>(y)), edge};
+                // Along one projector ray the camera depth grows with the
+                // distance from the projector: the smaller z is the lit point.
+                if (const int earlier = rowPoint[edge]; earlier >= 0) {
+                    if (scanPoint.position[2] < ws.points[earlier].position[2]) ws.points[earlier] = scanPoint;
+                    continue;
+                }
+                if (ws.pointCount == ws.maxPoints) {
+                    ws.truncated = true;
+                    return;
+                }
+                rowPoint[edge] = ws.pointCount;
+                ws.points[ws.pointCount++] = scanPoint;
             }
-            // The peak must lie inside the search window with its whole
-            // centroid window in the image: an edge whose profile the image
-            // border cuts off cannot be located.
-            if (!(peakValue > 0) || peak - kSearchRadius < 0 || peak + kSearchRadius > w - 2) continue;
-            if (lastLater && peak == x + kSearchRadius)
-                projectedGradients(row, hi, 1, ws.rgbOffset, m, weight, &samples[hi - lo]);
-            // Centroid of the peak's samples above a quarter of its height:
-            // averages the noise over ~3 samples, and the threshold keeps the
-            // tails of the neighbouring stripe edges out.
-            // Branch-free (the test above keeps the window in the image): a
-            // sample below the threshold adds a zero, which leaves the sums
-            // as they are, bit for bit (they start at +0 and are never -0).
-            float sum = 0, moment = 0;
-            for (int i = peak - kSearchRadius; i <= peak + kSearchRadius; ++i) {
-                const float g = std::max(gradientAt(i) - kCentroidThreshold * peakValue, 0.0f);
-                sum += g;
-                moment += g * static_cast<float>(i - peak);
-            }
-            const float offset = moment / sum;
-            const double u = peak + 0.5 + offset;
-            const auto point = RigModel::intersectRay(rays.at(u), ws.lightPlanes[edge]);
-            if (!point) continue;
-            const ScanPoint scanPoint{cv::Vec3f(static_cast<float>((*point)[0]), static_cast<float>((*point)[1]),
-                                                static_cast<float>((*point)[2])),
-                                      cv::Point2f(static_cast<float>(u), static_cast<float>(y)), edge};
-            // Along one projector ray the camera depth grows with the
-            // distance from the projector: the smaller z is the lit point.
-            if (const int earlier = rowPoint[edge]; earlier >= 0) {
-                if (scanPoint.position[2] < ws.points[earlier].position[2]) ws.points[earlier] = scanPoint;
-                continue;
-            }
-            if (ws.pointCount == ws.maxPoints) {
-                ws.truncated = true;
-                return;
-            }
-            rowPoint[edge] = ws.pointCount;
-            ws.points[ws.pointCount++] = scanPoint;
         }
     }
 }
