@@ -55,9 +55,13 @@ void projectedGradients(const std::uint8_t* row, int first, int count, const std
     using Int4 = std::int32_t __attribute__((vector_size(16)));
     using Float4 = float __attribute__((vector_size(16)));
     const Float4 zero = {0, 0, 0, 0};
-    // Local copies: the stores to out could alias m and weight.
-    const cv::Matx33f mm = m;
-    const cv::Vec3f ww = weight;
+    // Lanes of m and weight built once per call, not per step (the stores
+    // to out could alias m and weight, so the compiler reloaded them).
+    Float4 mm[3][3], ww[3];
+    for (int r = 0; r < 3; ++r) {
+        for (int c = 0; c < 3; ++c) mm[r][c] = Float4{m(r, c), m(r, c), m(r, c), m(r, c)};
+        ww[r] = Float4{weight[r], weight[r], weight[r], weight[r]};
+    }
     const std::array<int, 3> o = rgbOffset;
     auto step = [&](int k) {
         const std::uint8_t* p = row + 3 * (first + k);
@@ -69,7 +73,7 @@ void projectedGradients(const std::uint8_t* row, int first, int count, const std
         }
         Float4 sum = zero;
         for (int r = 0; r < 3; ++r) {
-            const Float4 corrected = zero + mm(r, 0) * raw[0] + mm(r, 1) * raw[1] + mm(r, 2) * raw[2];
+            const Float4 corrected = zero + mm[r][0] * raw[0] + mm[r][1] * raw[1] + mm[r][2] * raw[2];
             sum = sum + ww[r] * corrected;
         }
         std::memcpy(out + k, &sum, sizeof sum);
@@ -80,7 +84,7 @@ void projectedGradients(const std::uint8_t* row, int first, int count, const std
         return;
     }
 #endif
-    projectedGradientsReference(row, first + k, count - k, rgbOffset, m, weight, out + k);
+    if (k < count) projectedGradientsReference(row, first + k, count - k, rgbOffset, m, weight, out + k);
 }
 
 }  // namespace stria::pipeline
