@@ -3,10 +3,11 @@
 // simulator frames, the steepest-descent watershed (its row kernel NEON on
 // ARM) against a plain scalar writing of the same algorithm, label for label,
 // on simulator frames, noise, terraces and images 1-2 pixels wide or high,
-// and the counting-sort region colours
-// against the nth_element medians they replaced, with their row kernels
-// (NEON on ARM) against scalar references, and the region graph against a
-// map-based construction.
+// the region colours (pixels sorted by label, medians by a bitwise search)
+// against the nth_element medians they replaced, with the median kernel
+// (NEON on ARM) against a histogram, and the region graph against a
+// map-based construction, with its border mask and pair gradient kernels
+// against scalar references and pairGradient.
 #include "hal/sim/scene/scene.hpp"
 #include "pipeline/decoder/simd.hpp"
 #include "pipeline/decoder/workspace.hpp"
