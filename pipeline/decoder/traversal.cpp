@@ -107,6 +107,12 @@ public:
             propagate();
             ++ws_.passCount;
         }
+        // The checks look up a neighbour's stripe per edge: from a compact
+        // copy (28 KB at 780x580), not the 64-byte region records, a cache
+        // line each. In the scratch after the link pairs of rejectShortRuns
+        // (graphScratchEntries: regions + 2 entries per edge).
+        stripes_ = ws_.scratch.get() + 2 * static_cast<std::ptrdiff_t>(ws_.maxEdges);
+        for (int r = 0; r < ws_.regionCount; ++r) stripes_[r] = regions[r].stripe;
         markLinks();
         rejectContradictedRegions();
         rejectShortRuns();
@@ -377,7 +383,7 @@ private:
         for (int e = 0; e < ws_.edgeCount; ++e) {
             const GraphEdge& edge = ws_.edges[e];
             link[e] = kNoLink;
-            const int sa = ws_.regions[edge.a].stripe, sb = ws_.regions[edge.b].stripe;
+            const int sa = stripes_[edge.a], sb = stripes_[edge.b];
             if (sa < 0 || sb < 0 || edge.direction == EdgeDirection::Parallel) continue;
             const int step = edge.direction == EdgeDirection::Forward ? 1 : -1;  // b = a + step if consecutive
             if (sb == sa) link[e] = kSameStripe;
@@ -414,7 +420,7 @@ private:
                 const GraphEdge& edge = ws_.edges[edgeIndex];
                 const EdgeDirection dir = directionFrom(edge, v);
                 const int w = otherEnd(edge, v);
-                const int neighbour = ws_.regions[w].stripe;
+                const int neighbour = stripes_[w];
                 if (dir == EdgeDirection::Parallel) {
                     // Along the stripes the stripe stays: a weak edge to a
                     // region decoded as another stripe contradicts one of them.
@@ -435,7 +441,7 @@ private:
             reject[v] = contradiction > kContradictionRatio * support;
         }
         for (int v = 0; v < ws_.regionCount; ++v)
-            if (reject[v]) ws_.regions[v].stripe = -1;
+            if (reject[v]) undecode(v);
     }
 
     // The window property, region by region: a region keeps its stripe only
@@ -468,7 +474,7 @@ private:
         int linkCount = 0;
         for (int e = 0; e < ws_.edgeCount; ++e) {
             const GraphEdge& edge = ws_.edges[e];
-            if (link[e] == kNoLink || ws_.regions[edge.a].stripe < 0 || ws_.regions[edge.b].stripe < 0) continue;
+            if (link[e] == kNoLink || stripes_[edge.a] < 0 || stripes_[edge.b] < 0) continue;
             // lo = the region on the left (lower stripe side), hi = on the right.
             const bool aLeft = edge.direction == EdgeDirection::Forward;
             pairs[2 * linkCount] = aLeft ? edge.a : edge.b;
@@ -495,8 +501,14 @@ private:
             const int stripe = ws_.regions[v].stripe;
             if (stripe < 0) continue;
             const bool unbounded = pattern.color(stripe) == 0 && (left(v) == 0 || right(v) == 0);
-            if (left(v) + right(v) < window || unbounded) ws_.regions[v].stripe = -1;
+            if (left(v) + right(v) < window || unbounded) undecode(v);
         }
+    }
+
+    void undecode(int v)
+    {
+        ws_.regions[v].stripe = -1;
+        stripes_[v] = -1;
     }
 
     static float maxChannelRange(const Region& r) { return std::max({r.range[0], r.range[1], r.range[2]}); }
@@ -518,6 +530,7 @@ private:
 
     DecoderWorkspace& ws_;
     const float t_, alpha_, A_, beta_;
+    std::int32_t* stripes_ = nullptr;  // the regions' stripes during the checks (run)
 };
 
 }  // namespace
