@@ -107,7 +107,7 @@ float symbolError(const EqualizedChange& change, SymbolCode symbol, float t)
 SymbolCode optimalSymbol(const std::array<float, 3>& c, float t)
 {
     int s[3];
-    for (int ch = 0; ch < 3; ++ch) s[ch] = c[ch] <= -t ? -1 : c[ch] >= t ? 1 : 0;
+    for (int ch = 0; ch < 3; ++ch) s[ch] = (c[ch] >= t) - (c[ch] <= -t);  // no branch: the signs are data
     return makeSymbol(s[0], s[1], s[2]);
 }
 
@@ -135,9 +135,10 @@ void computeEdgeFeatures(DecoderWorkspace& ws)
         // Within 45 degrees of the primary direction: |along| / length >= cos 45.
         const float length2 = nx * nx + ny * ny;
         const float along = nx * ws.primary[0] + ny * ws.primary[1];
-        edge.direction = length2 == 0 || 2 * along * along < length2 ? EdgeDirection::Parallel
-                         : along > 0                                 ? EdgeDirection::Forward
-                                                                     : EdgeDirection::Backward;
+        // Arithmetic, not branches: the direction of one edge says nothing
+        // about the next one's.
+        const bool parallel = length2 == 0 || 2 * along * along < length2;
+        edge.direction = static_cast<EdgeDirection>(!parallel * (2 * (along > 0) - 1));
         for (int c = 0; c < 3; ++c) {
             const float change = std::abs(b.color[c] - a.color[c]);
             a.range[c] = std::max(a.range[c], change);
