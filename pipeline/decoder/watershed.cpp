@@ -238,25 +238,43 @@ void computeWatershed(DecoderWorkspace& ws)
         for (int i = 0; i < count; ++i) label[y * w + columns[i]] = parent[~label[y * w + columns[i]]];
     }
 
-    // 4. Every other pixel takes the basin at the end of its arrows, in raster
-    // order: an arrow up or left leads to a pixel labelled before, so the
-    // pixel copies its label (two thirds of the arrows, without a branch); an
-    // unresolved pixel with an arrow right or down walks to a labelled one,
-    // labelling the path on the way back (so the rest of a run of arrows to
-    // the right is labelled when the pass reaches it).
-    const std::array<int, 16> source = [&] {
-        std::array<int, 16> offset{};  // 0 (the pixel itself) for right, down and flat
-        for (int c : {kDescentUp, kDescentLeft}) offset[c] = offset[kPlateauArrow | c] = step[c];
-        return offset;
-    }();
-    for (int p = 0; p < n; ++p) {
-        const std::int32_t copied = label[p + source[code[p]]];
-        label[p] = copied;
-        if (copied != kUnresolved) continue;
-        int q = p;
-        while (label[q] == kUnresolved) q += step[code[q] & 3];
-        const std::int32_t basin = label[q];
-        for (int r = p; r != q; r += step[code[r] & 3]) label[r] = basin;
+    // 4. Every other pixel takes the basin at the end of its arrows, row by
+    // row from the top (the row above is labelled): a sweep to the right
+    // copies the labels along arrows up and left, one to the left those
+    // along arrows right (a run of arrows ends at a pixel with an arrow up,
+    // a minimum or an arrow down, never at one against it), without a branch.
+    // What remains leads down: those pixels, picked in the second sweep, walk
+    // to a labelled pixel and label the path on the way back.
+    for (int y = 0; y < h; ++y) {
+        const std::uint8_t* rowCode = code + y * w;
+        std::int32_t* row = label + y * w;
+        const std::int32_t* above = y > 0 ? row - w : row;  // no arrow up in row 0
+        // Selects by masks: GCC turns the ternaries into branches here.
+        auto select = [](bool condition, std::int32_t a, std::int32_t b) {
+            const std::int32_t mask = -static_cast<std::int32_t>(condition);
+            return (a & mask) | (b & ~mask);
+        };
+        std::int32_t previous = kUnresolved;
+        for (int x = 0; x < w; ++x) {
+            const int direction = rowCode[x] & ~kPlateauArrow;
+            previous = select(direction == kDescentLeft, previous, select(direction == kDescentUp, above[x], row[x]));
+            row[x] = previous;
+        }
+        std::int32_t next = kUnresolved;
+        int count = 0;
+        for (int x = w - 1; x >= 0; --x) {
+            const std::int32_t l = select((rowCode[x] & ~kPlateauArrow) == kDescentRight, next, row[x]);
+            row[x] = next = l;
+            columns[count] = x;
+            count += l == kUnresolved;
+        }
+        for (int i = 0; i < count; ++i) {
+            const int p = y * w + columns[i];
+            int q = p;
+            while (label[q] == kUnresolved) q += step[code[q] & 3];
+            const std::int32_t basin = label[q];
+            for (int r = p; r != q; r += step[code[r] & 3]) label[r] = basin;
+        }
     }
 
     // 5. Over capacity: each excess basin joins a neighbouring one, chains of
