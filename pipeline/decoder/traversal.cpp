@@ -150,7 +150,7 @@ private:
     // keys, without a comparison sort's unpredictable branches (std::sort:
     // 24 000 mispredictions per 780x580 frame). The passes alternate with
     // the open heap's storage, free before the first pass: it holds
-    // max(16, maxEdges / 2) entries of 20 bytes (decoder.cpp), room for
+    // max(16, maxEdges / 2) entries of 24 bytes (decoder.cpp), room for
     // maxEdges keys.
     void sortSeeds(int count)
     {
@@ -357,28 +357,63 @@ private:
                 ws_.truncated = true;
                 return;
             }
-            ws_.open[ws_.openCount++] = {h.error, h.positionError, to, h.reference, static_cast<std::int16_t>(h.stripe),
-                                         static_cast<std::int16_t>(tokens)};
-            std::push_heap(ws_.open.get(), ws_.open.get() + ws_.openCount, Later());
+            // The heap key orders by error, then region: the pushed errors
+            // are below A or tokenErrorLimit, so never NaN.
+            pushOpen({static_cast<std::uint64_t>(orderedBits(h.error)) << 32 | static_cast<std::uint32_t>(to),
+                      h.positionError, h.reference, static_cast<std::int16_t>(h.stripe),
+                      static_cast<std::int16_t>(tokens)});
         }
     }
 
-    // Heap order: the lowest error on top. A function object, not a function
-    // pointer, so that push_heap and pop_heap inline it.
-    struct Later {
-        bool operator()(const OpenEntry& l, const OpenEntry& r) const
-        {
-            return l.error > r.error || (l.error == r.error && l.region > r.region);
+    // The open heap, the lowest key on top: std::push_heap and std::pop_heap
+    // step for step with the order "later = larger key" (the same entries
+    // in the same places, ties included), but the child on the way down is
+    // chosen without a branch (its comparison is noise to the predictor).
+    void pushOpen(const OpenEntry& entry)
+    {
+        OpenEntry* heap = ws_.open.get();
+        siftUp(heap, ws_.openCount++, entry);
+    }
+
+    OpenEntry popOpen()
+    {
+        OpenEntry* heap = ws_.open.get();
+        const OpenEntry top = heap[0];
+        const int count = --ws_.openCount;
+        if (count == 0) return top;
+        const OpenEntry last = heap[count];
+        int hole = 0, child = 0;
+        while (child < (count - 1) / 2) {
+            child = 2 * (child + 1);
+            child -= heap[child].order > heap[child - 1].order;
+            heap[hole] = heap[child];
+            hole = child;
         }
-    };
+        if ((count & 1) == 0 && child == (count - 2) / 2) {
+            child = 2 * (child + 1);
+            heap[hole] = heap[child - 1];
+            hole = child - 1;
+        }
+        siftUp(heap, hole, last);
+        return top;
+    }
+
+    static void siftUp(OpenEntry* heap, int hole, const OpenEntry& entry)
+    {
+        for (int parent = (hole - 1) / 2; hole > 0 && heap[parent].order > entry.order; parent = (hole - 1) / 2) {
+            heap[hole] = heap[parent];
+            hole = parent;
+        }
+        heap[hole] = entry;
+    }
 
     // Step 2.
     void propagate()
     {
         while (ws_.openCount > 0) {
-            std::pop_heap(ws_.open.get(), ws_.open.get() + ws_.openCount, Later());
-            const OpenEntry entry = ws_.open[--ws_.openCount];
-            Region& r = ws_.regions[entry.region];
+            const OpenEntry entry = popOpen();
+            const int region = static_cast<std::int32_t>(entry.order & 0xffffffffu);
+            Region& r = ws_.regions[region];
             if (r.stripe == entry.stripe) {
                 r.positionError = std::min(r.positionError, entry.positionError);
                 continue;
@@ -389,7 +424,7 @@ private:
             r.reference = entry.reference;
             r.tokens = entry.tokens;
             r.component = ws_.passCount;
-            pushNeighbours(entry.region);
+            pushNeighbours(region);
         }
     }
 

@@ -57,12 +57,13 @@ struct GraphEdge {
     float bestMatch = 0;
 };
 
-// A pending visit in the best-first propagation: region `region` is stripe
-// `stripe`, reached by an edge with this error.
+// A pending visit in the best-first propagation: a region is stripe
+// `stripe`, reached by an edge with some error.
 struct OpenEntry {
-    float error;          // eq. 9 for the hypothesised symbol (heap key)
+    // Heap key (traversal.cpp): the error (eq. 9 for the hypothesised symbol)
+    // as order-preserving bits in the high half, the region in the low half.
+    std::uint64_t order;
     float positionError;  // eq. 10 term of that edge
-    std::int32_t region;
     std::int32_t reference;  // the region's reference for later null-edge tests
     std::int16_t stripe;
     std::int16_t tokens;     // token bucket level after this edge
