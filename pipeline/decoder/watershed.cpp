@@ -97,6 +97,22 @@ int flatColumns(const std::uint8_t* code, int width, std::int32_t* __restrict co
     return count;
 }
 
+// a where the condition holds, else b, by a mask: GCC turns a ternary on
+// data into a branch (or a conditional store) in the loops below.
+inline std::int32_t select(bool condition, std::int32_t a, std::int32_t b)
+{
+    const std::int32_t mask = -static_cast<std::int32_t>(condition);
+    return (a & mask) | (b & ~mask);
+}
+
+// Each pixel of a row with an arrow up takes the label above it. The rows
+// do not overlap (restrict): GCC vectorises the selects.
+void copyAlongArrowsUp(const std::uint8_t* __restrict code, const std::int32_t* __restrict above,
+                       std::int32_t* __restrict row, int width)
+{
+    for (int x = 0; x < width; ++x) row[x] = select((code[x] & ~kPlateauArrow) == kDescentUp, above[x], row[x]);
+}
+
 // Root of a provisional label: roots hold ~(first pixel), others a smaller label.
 std::int32_t findRoot(std::int32_t* parent, std::int32_t l)
 {
@@ -248,20 +264,14 @@ void computeWatershed(DecoderWorkspace& ws)
     for (int y = 0; y < h; ++y) {
         const std::uint8_t* rowCode = code + y * w;
         std::int32_t* row = label + y * w;
-        const std::int32_t* above = y > 0 ? row - w : row;  // no arrow up in row 0
-        // Selects by masks: GCC turns the ternaries into branches here.
-        auto select = [](bool condition, std::int32_t a, std::int32_t b) {
-            const std::int32_t mask = -static_cast<std::int32_t>(condition);
-            return (a & mask) | (b & ~mask);
-        };
+        if (y > 0) copyAlongArrowsUp(rowCode, row - w, row, w);  // no arrow up in row 0
         std::int32_t previous = kUnresolved;
-        for (int x = 0; x < w; ++x) {
-            const int direction = rowCode[x] & ~kPlateauArrow;
-            previous = select(direction == kDescentLeft, previous, select(direction == kDescentUp, above[x], row[x]));
-            row[x] = previous;
-        }
+#pragma GCC unroll 4
+        for (int x = 0; x < w; ++x)
+            row[x] = previous = select((rowCode[x] & ~kPlateauArrow) == kDescentLeft, previous, row[x]);
         std::int32_t next = kUnresolved;
         int count = 0;
+#pragma GCC unroll 4
         for (int x = w - 1; x >= 0; --x) {
             const std::int32_t l = select((rowCode[x] & ~kPlateauArrow) == kDescentRight, next, row[x]);
             row[x] = next = l;
