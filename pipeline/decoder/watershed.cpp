@@ -201,29 +201,33 @@ void computeWatershed(DecoderWorkspace& ws)
     // pixels are on one level); every other pixel is unresolved.
     std::fill(label, label + n, kUnresolved);
     std::int32_t* parent = ws.pixelOrder;
-    auto isMinimum = [&](int p) { return code[p] == kDescentFlat; };
     int provisional = 0, minima = 0;
     for (int y = 0; y < h; ++y) {
         const int count = flatColumns(code + y * w, w, columns);
+        const int upStep = y > 0 ? w : 0;  // row 0: the pixel itself, never "up"
+        // Without a branch but for two differently labelled neighbours (the
+        // runs are short: branches on their ends mispredict): the left
+        // neighbour's label, else the upper one's, else a new label (its
+        // parent entry written anyway and kept only then).
         for (int i = 0; i < count; ++i) {
-            const int x = columns[i], p = y * w + x;
-            const bool left = x > 0 && isMinimum(p - 1), up = y > 0 && isMinimum(p - w);
-            if (!left && !up) {
-                parent[provisional] = ~p;
-                label[p] = ~provisional++;
-                ++minima;
-            } else if (!up || !left) {
-                label[p] = label[up ? p - w : p - 1];
-            } else if (label[p - 1] == label[p - w]) {  // most of a plateau's inside
-                label[p] = label[p - 1];
-            } else {
-                const std::int32_t a = findRoot(parent, ~label[p - 1]), b = findRoot(parent, ~label[p - w]);
+            const int x = columns[i], p = y * w + x, leftStep = x > 0;
+            const bool left = leftStep && code[p - leftStep] == kDescentFlat;
+            const bool up = upStep && code[p - upStep] == kDescentFlat;
+            const std::int32_t fromLeft = label[p - leftStep], fromUp = label[p - upStep];
+            const bool fresh = !left & !up;
+            parent[provisional] = ~p;
+            std::int32_t l = select(left, fromLeft, select(up, fromUp, ~provisional));
+            provisional += fresh;
+            minima += fresh;
+            if (left & up & (fromLeft != fromUp)) {
+                const std::int32_t a = findRoot(parent, ~fromLeft), b = findRoot(parent, ~fromUp);
                 if (a != b) {
                     parent[std::max(a, b)] = std::min(a, b);
                     --minima;
                 }
-                label[p] = ~std::min(a, b);
+                l = ~std::min(a, b);
             }
+            label[p] = l;
         }
     }
 
