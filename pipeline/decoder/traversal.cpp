@@ -92,9 +92,17 @@ public:
     void run()
     {
         Region* regions = ws_.regions.get();
+        // The regions' stripes also in a compact copy, kept equal to the
+        // records': the propagation and the checks look up a neighbour's
+        // stripe per edge, and the 64-byte records would bring a cache line
+        // each (the copy is 28 KB at 780x580). In the scratch after the seed
+        // keys and the link pairs of rejectShortRuns (graphScratchEntries:
+        // regions + 2 entries per edge).
+        stripes_ = ws_.scratch.get() + 2 * static_cast<std::ptrdiff_t>(ws_.maxEdges);
         for (int r = 0; r < ws_.regionCount; ++r) {
             regions[r].stripe = -1;
             regions[r].component = -1;
+            stripes_[r] = -1;
         }
         int seeds = 0;
         for (int e = 0; e < ws_.edgeCount; ++e) {  // without a branch: which edges qualify is data
@@ -105,17 +113,11 @@ public:
         ws_.passCount = 0;
         for (int i = 0; i < seeds; ++i) {
             const GraphEdge& edge = ws_.edges[ws_.edgeOrder[i]];
-            if (regions[edge.a].stripe >= 0 || regions[edge.b].stripe >= 0) continue;
+            if (stripes_[edge.a] >= 0 || stripes_[edge.b] >= 0) continue;
             if (!findUniquePath(ws_.edgeOrder[i])) continue;
             propagate();
             ++ws_.passCount;
         }
-        // The checks look up a neighbour's stripe per edge: from a compact
-        // copy (28 KB at 780x580), not the 64-byte region records, a cache
-        // line each. In the scratch after the link pairs of rejectShortRuns
-        // (graphScratchEntries: regions + 2 entries per edge).
-        stripes_ = ws_.scratch.get() + 2 * static_cast<std::ptrdiff_t>(ws_.maxEdges);
-        for (int r = 0; r < ws_.regionCount; ++r) stripes_[r] = regions[r].stripe;
         markLinks();
         rejectContradictedRegions();
         rejectShortRuns();
@@ -212,7 +214,7 @@ private:
                     if (directionFrom(edge, endRegion) != (left ? EdgeDirection::Backward : EdgeDirection::Forward))
                         continue;
                     const int next = otherEnd(edge, endRegion);
-                    if (ws_.regions[next].stripe >= 0 || std::find(path + begin, path + end, next) != path + end)
+                    if (stripes_[next] >= 0 || std::find(path + begin, path + end, next) != path + end)
                         continue;
                     // The change is computed for the first symbol other than
                     // the optimal one (whose error the edge stage left).
@@ -258,7 +260,7 @@ private:
         const int length = end - begin;
         for (int i = 0; i < length; ++i) {
             Region& r = ws_.regions[path[begin + i]];
-            r.stripe = first + i;
+            r.stripe = stripes_[path[begin + i]] = first + i;
             r.reference = path[begin + (i > 0 ? i - 1 : 1)];
             r.component = pass;
             r.tokens = std::min(length - 1, ws_.params.tokenBucketSize);
@@ -336,7 +338,7 @@ private:
         for (int i = 0; i < f.degree; ++i) {
             const GraphEdge& edge = ws_.edges[ws_.adjacency[f.adjacencyBegin + i]];
             const int to = otherEnd(edge, from);
-            const int toStripe = ws_.regions[to].stripe;
+            const int toStripe = stripes_[to];
             if (toStripe == f.stripe) continue;
             // Across the stripes the only hypothesis is the next stripe: a
             // neighbour that holds it already needs no error evaluated (most
@@ -419,7 +421,7 @@ private:
                 continue;
             }
             if (r.stripe >= 0 && r.positionError <= entry.positionError) continue;
-            r.stripe = entry.stripe;
+            r.stripe = stripes_[region] = entry.stripe;
             r.positionError = entry.positionError;
             r.reference = entry.reference;
             r.tokens = entry.tokens;
@@ -586,7 +588,7 @@ private:
 
     DecoderWorkspace& ws_;
     const float t_, alpha_, A_, beta_;
-    std::int32_t* stripes_ = nullptr;  // the regions' stripes during the checks (run)
+    std::int32_t* stripes_ = nullptr;  // the regions' stripes (run)
 };
 
 }  // namespace
