@@ -101,8 +101,7 @@ int flatColumns(const std::uint8_t* code, int width, std::int32_t* __restrict co
 // data into a branch (or a conditional store) in the loops below.
 inline std::int32_t select(bool condition, std::int32_t a, std::int32_t b)
 {
-    const std::int32_t mask = -static_cast<std::int32_t>(condition);
-    return (a & mask) | (b & ~mask);
+    return b ^ ((a ^ b) & -static_cast<std::int32_t>(condition));
 }
 
 // Each pixel of a row with an arrow up takes the label above it. The rows
@@ -204,22 +203,27 @@ void computeWatershed(DecoderWorkspace& ws)
     int provisional = 0, minima = 0;
     for (int y = 0; y < h; ++y) {
         const int count = flatColumns(code + y * w, w, columns);
-        const int upStep = y > 0 ? w : 0;  // row 0: the pixel itself, never "up"
+        std::int32_t* row = label + y * w;
+        // Row 0: the wall above (never flat); the labels read there unused.
+        const std::uint8_t* codeAbove = y > 0 ? code + (y - 1) * w : wall;
+        const std::int32_t* labelAbove = y > 0 ? row - w : row;
         // Without a branch but for two differently labelled neighbours (the
         // runs are short: branches on their ends mispredict): the left
         // neighbour's label, else the upper one's, else a new label (its
         // parent entry written anyway and kept only then).
+        int previousX = -2;
         for (int i = 0; i < count; ++i) {
-            const int x = columns[i], p = y * w + x, leftStep = x > 0;
-            const bool left = leftStep && code[p - leftStep] == kDescentFlat;
-            const bool up = upStep && code[p - upStep] == kDescentFlat;
-            const std::int32_t fromLeft = label[p - leftStep], fromUp = label[p - upStep];
+            const int x = columns[i];
+            const bool left = previousX + 1 == x, up = codeAbove[x] == kDescentFlat;
+            previousX = x;
+            const std::int32_t fromLeft = row[x - left], fromUp = labelAbove[x];
             const bool fresh = !left & !up;
-            parent[provisional] = ~p;
+            parent[provisional] = ~(y * w + x);
             std::int32_t l = select(left, fromLeft, select(up, fromUp, ~provisional));
             provisional += fresh;
             minima += fresh;
-            if (left & up & (fromLeft != fromUp)) {
+            // One branch, not three: non-zero if both neighbours are flat and differ.
+            if ((-static_cast<std::int32_t>(left) & -static_cast<std::int32_t>(up) & (fromLeft ^ fromUp)) != 0) {
                 const std::int32_t a = findRoot(parent, ~fromLeft), b = findRoot(parent, ~fromUp);
                 if (a != b) {
                     parent[std::max(a, b)] = std::min(a, b);
@@ -227,7 +231,7 @@ void computeWatershed(DecoderWorkspace& ws)
                 }
                 l = ~std::min(a, b);
             }
-            label[p] = l;
+            row[x] = l;
         }
     }
 
