@@ -4,7 +4,7 @@
 # depend on the load of a shared machine, so they compare variants where
 # times cannot.
 #
-#   tests/bench/profile-stages.sh [BUILD_DIR]    (default: build, the host preset)
+#   tests/bench/profile-stages.sh [BUILD_DIR]    (default: build/host, the host preset)
 #
 # Renders the benchmark's frames (relief, coloured albedo, noise 4, seed 1, at
 # 780x580 and 1388x1038), decodes each twice under valgrind's callgrind with
@@ -13,7 +13,7 @@
 # and per pixel. Takes about a minute.
 set -eu
 
-build=${1:-build}
+build=${1:-build/host}
 stria=$build/firmware/stria
 if [ ! -x "$stria" ]; then
     echo "profile-stages: no $stria; build it first (cmake --preset host && cmake --build --preset host)" >&2
