@@ -24,6 +24,7 @@
 #include <bit>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 
 namespace stria::pipeline {
 namespace {
@@ -113,19 +114,25 @@ void computePoints(DecoderWorkspace& ws)
                 for (int c = 0; c < 3; ++c)
                     weight[c] = orientation * static_cast<float>(sign[c]) / std::max(0.5f * (left.range[c] + right.range[c]), 1.0f);
                 // Projected gradient at half-pixel positions i + 0.5, i in
-                // [lo, hi]: every sample both searches below can read. The last
-                // one is read only by the centroid of a peak at x + kSearchRadius:
-                // it is computed then, so most edges take 8 samples (two kernel
-                // steps of 4) rather than 9 (three).
-                const int lo = std::max(x - 2 * kSearchRadius, 0), hi = std::min(x + 2 * kSearchRadius, w - 2);
-                std::array<float, 4 * kSearchRadius + 1> samples;
+                // [x - kReach, x + kReach]: every sample both searches below
+                // can read. Near the image border the samples past it are
+                // -inf, which never wins the peak search, so that search has
+                // fixed bounds (unrolled: 5 selects, not a loop with clamped
+                // bounds; depth 24.0 -> 22.3 M instructions at 780x580). The
+                // last sample is read only by the centroid of a peak at
+                // x + kSearchRadius: it is computed then, so most edges take
+                // 8 samples (two kernel steps of 4) rather than 9 (three).
+                constexpr int kReach = 2 * kSearchRadius;
+                const int lo = std::max(x - kReach, 0), hi = std::min(x + kReach, w - 2);
+                std::array<float, 2 * kReach + 1> samples;
                 const bool lastLater = hi - lo + 1 == static_cast<int>(samples.size());
-                projectedGradients(row, lo, hi - lo + 1 - lastLater, ws.rgbOffset, m, weight, samples.data());
-                auto gradientAt = [&](int i) { return samples[i - lo]; };
+                if (!lastLater) samples.fill(-std::numeric_limits<float>::infinity());
+                auto sample = [&](int i) -> float& { return samples[i - x + kReach]; };
+                projectedGradients(row, lo, hi - lo + 1 - lastLater, ws.rgbOffset, m, weight, &sample(lo));
                 int peak = x;
-                float peakValue = gradientAt(x);
-                for (int i = std::max(x - kSearchRadius, 0); i <= std::min(x + kSearchRadius, w - 2); ++i) {
-                    const float g = gradientAt(i);
+                float peakValue = sample(x);
+                for (int i = x - kSearchRadius; i <= x + kSearchRadius; ++i) {
+                    const float g = sample(i);
                     const bool higher = g > peakValue;  // selects, not a branch: which sample wins is noise
                     peak = higher ? i : peak;
                     peakValue = higher ? g : peakValue;
@@ -135,7 +142,7 @@ void computePoints(DecoderWorkspace& ws)
                 // border cuts off cannot be located.
                 if (!(peakValue > 0) || peak - kSearchRadius < 0 || peak + kSearchRadius > w - 2) continue;
                 if (lastLater && peak == x + kSearchRadius)
-                    projectedGradients(row, hi, 1, ws.rgbOffset, m, weight, &samples[hi - lo]);
+                    projectedGradients(row, hi, 1, ws.rgbOffset, m, weight, &sample(hi));
                 // Centroid of the peak's samples above a quarter of its height:
                 // averages the noise over ~3 samples, and the threshold keeps the
                 // tails of the neighbouring stripe edges out.
@@ -144,7 +151,7 @@ void computePoints(DecoderWorkspace& ws)
                 // as they are, bit for bit (they start at +0 and are never -0).
                 float sum = 0, moment = 0;
                 for (int i = peak - kSearchRadius; i <= peak + kSearchRadius; ++i) {
-                    const float g = std::max(gradientAt(i) - kCentroidThreshold * peakValue, 0.0f);
+                    const float g = std::max(sample(i) - kCentroidThreshold * peakValue, 0.0f);
                     sum += g;
                     moment += g * static_cast<float>(i - peak);
                 }
