@@ -147,7 +147,6 @@ void computeRegions(DecoderWorkspace& ws)
         regions[r].centroidY = static_cast<float>(static_cast<double>(sums[2 * r + 1]) / size);
         counter[r] = offset;
         offset += regions[r].pixelCount;
-        head[r] = offset;  // the edge lists are done: the region's end
     }
 
     // The second pass: a pixel's 3 bytes and the next one in 4 bytes (the
@@ -160,19 +159,6 @@ void computeRegions(DecoderWorkspace& ws)
             const std::uint8_t* pixel = ws.frame.row(y) + 3 * x;
             std::uint32_t* out = sorted + counter[r];
             counter[r] += end - x;
-            if (y + 1 < h && out - sorted + ((end - x + 3) & ~3) <= head[r]) {
-                // Whole blocks of 4 (fewer loop exits to mispredict): up to
-                // 3 pixels past the run land in the region's own later slots,
-                // which its later runs overwrite, and are read from at most
-                // 10 bytes past the row end (inside the next row).
-                for (int i = x; i < end; i += 4, pixel += 12, out += 4) {
-                    std::memcpy(out, pixel, 4);
-                    std::memcpy(out + 1, pixel + 3, 4);
-                    std::memcpy(out + 2, pixel + 6, 4);
-                    std::memcpy(out + 3, pixel + 9, 4);
-                }
-                return;
-            }
             const int whole = y + 1 == h && end == w ? end - 1 : end;
 #pragma GCC unroll 4
             for (int i = x; i < whole; ++i, pixel += 3) std::memcpy(out++, pixel, 4);
