@@ -64,10 +64,8 @@ cv::Vec2f primaryDirection(const RigModel& rig, const StripePattern& pattern)
 std::size_t scratchEntries(int width, int height, int maxRegions, int maxEdges)
 {
     const std::size_t gradientLanes = 6 * static_cast<std::size_t>(width);  // 12 x width int16
-    // The region sums and the graph's edge lists side by side: computeRegions
-    // fills both in one pass.
-    return std::max({gradientLanes, watershedScratchEntries(width, height),
-                     regionScratchEntries(maxRegions) + graphScratchEntries(maxRegions, maxEdges)});
+    return std::max({gradientLanes, watershedScratchEntries(width, height), regionScratchEntries(maxRegions),
+                     graphScratchEntries(maxRegions, maxEdges)});
 }
 
 Decoder::Decoder(std::unique_ptr<DecoderWorkspace> workspace) : ws_(std::move(workspace)) {}
@@ -157,8 +155,6 @@ Result<DecodeResult> Decoder::decode(const FrameView& frame)
     t.gradientMs = millisecondsSince(lap);
     computeWatershed(ws);
     t.watershedMs = millisecondsSince(lap);
-    // regionsMs includes the graph's edges and border statistics (one raster
-    // pass feeds both); graphMs is the incidence lists.
     computeRegions(ws);
     t.regionsMs = millisecondsSince(lap);
     buildGraph(ws);

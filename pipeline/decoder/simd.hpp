@@ -48,7 +48,7 @@ void projectedGradients(const std::uint8_t* row, int first, int count, const std
 std::array<std::uint8_t, 3> channelMediansReference(const std::uint32_t* pixels, int count);
 std::array<std::uint8_t, 3> channelMedians(const std::uint32_t* pixels, int count);
 
-// Region statistics and graph edges (regions.cpp). Bit i of the result
+// Region statistics and graph (regions.cpp, graph.cpp). Bit i of the result
 // is set where a[i] != b[i], for i < count <= 64: with b = a + 1 the borders
 // between horizontal neighbours of a label row (the ends of its runs), with
 // b = a + width those to the row below.

@@ -5,9 +5,8 @@
 // whole data flow:
 //   gradient.cpp   colour gradient magnitude (8 bit)
 //   watershed.cpp  superpixel labels (watershed by steepest descent)
-//   regions.cpp    per-superpixel median colour, crosstalk-corrected; centroid;
-//                  region adjacency graph edges with border statistics
-//   graph.cpp      the graph's incidence lists
+//   regions.cpp    per-superpixel median colour, crosstalk-corrected; centroid
+//   graph.cpp      region adjacency graph with border statistics
 //   edges.cpp      edge weight, symbol, errors (eq. 1-9), direction (fig. 5)
 //   traversal.cpp  stripe positions by unique paths + best-first growth
 //   depth.cpp      sub-pixel stripe edges per row, ray/light-plane points
@@ -124,12 +123,11 @@ struct DecoderWorkspace {
 
 // Watershed: the scratch entries it needs (a descent code byte per pixel).
 std::size_t watershedScratchEntries(int width, int height);
-// Region statistics and the graph's edge lists (both used at once by
-// computeRegions): the scratch entries they need.
+// Region statistics and graph construction: the scratch entries they need.
 std::size_t regionScratchEntries(std::size_t regions);
 std::size_t graphScratchEntries(std::size_t regions, std::size_t edges);
 // The scratch every stage's share fits in (decoder.cpp): the gradient kernel's
-// row lanes, the watershed's codes, the region sums with the graph's edge lists;
+// row lanes, the watershed's codes, the region sums, the graph's edge lists;
 // the traversal's seed keys and link pairs (2 entries per edge) and depth's
 // region stripes fit in the graph's share.
 std::size_t scratchEntries(int width, int height, int maxRegions, int maxEdges);
