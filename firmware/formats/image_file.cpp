@@ -101,12 +101,13 @@ Result<cv::Mat> readPng(const std::string& path)
 
 Result<std::vector<unsigned char>> encodePng(const cv::Mat& image)
 {
-    // const: these must survive libpng's longjmp unchanged
+    // Set before setjmp and never changed, so libpng's longjmp cannot clobber
+    // it; the bit depth is read from the image where it is needed (gcc's
+    // -Wclobbered flagged a local copy held in a register).
     const int colorType = image.type() == CV_8UC3   ? PNG_COLOR_TYPE_RGB
                           : image.type() == CV_8UC4 ? PNG_COLOR_TYPE_RGBA
                           : (image.type() == CV_8UC1 || image.type() == CV_16UC1) ? PNG_COLOR_TYPE_GRAY
                                                                                    : -1;
-    const int bitDepth = image.type() == CV_16UC1 ? 16 : 8;
     if (colorType < 0)
         return Status::error("cannot write PNG: unsupported image type " + std::to_string(image.type()));
     if (image.empty()) return Status::error("cannot write PNG: the image is empty");
@@ -130,12 +131,13 @@ Result<std::vector<unsigned char>> encodePng(const cv::Mat& image)
             buffer->insert(buffer->end(), data, data + length);
         },
         nullptr);
-    png_set_IHDR(png, info, static_cast<png_uint_32>(image.cols), static_cast<png_uint_32>(image.rows), bitDepth,
+    png_set_IHDR(png, info, static_cast<png_uint_32>(image.cols), static_cast<png_uint_32>(image.rows),
+                 image.depth() == CV_16U ? 16 : 8,
                  colorType, PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
     png_set_compression_level(png, 3);  // fast: previews are written on the scanner after every scan
     png_write_info(png, info);
     if (image.channels() >= 3) png_set_bgr(png);
-    if (bitDepth == 16) png_set_swap(png);  // cv::Mat holds host (little-endian) order
+    if (image.depth() == CV_16U) png_set_swap(png);  // cv::Mat holds host (little-endian) order
     for (int y = 0; y < image.rows; ++y) rows[static_cast<std::size_t>(y)] = const_cast<png_bytep>(image.ptr<png_byte>(y));
     png_write_image(png, rows.data());
     png_write_end(png, nullptr);
