@@ -89,96 +89,95 @@ void computePoints(DecoderWorkspace& ws)
     // pattern edge, free after the traversal).
     std::int32_t* rowPoint = ws.candidates.get();
     const int edgeCount = ws.pattern.edgeCount();
+    bool full = false;  // maxPoints reached: the frame is truncated
 
     for (int y = 0; y < h; ++y) {
         const std::int32_t* label = labels + static_cast<std::ptrdiff_t>(y) * w;
         const std::uint8_t* row = ws.frame.row(y);
         const RowRays rays(ws, y);
         std::fill(rowPoint, rowPoint + edgeCount, -1);
-        // Label changes 64 at a time (borderMask), without a branch per
+        // Label changes from borderMask's masks, without a branch per
         // pixel: whether two neighbours share a label is noise to a branch
         // predictor (it mispredicted 85 000 times per 780x580 frame).
-        for (int x0 = 0; x0 + 1 < w; x0 += 64) {
-            for (std::uint64_t changes = borderMask(label + x0, label + x0 + 1, std::min(64, w - 1 - x0)); changes;
-                 changes &= changes - 1) {
-                const int x = x0 + std::countr_zero(changes);
-                const int leftStripe = stripes[label[x]], rightStripe = stripes[label[x + 1]];
-                if (leftStripe < 0 || rightStripe < 0 || std::abs(leftStripe - rightStripe) != 1) continue;
-                const Region& left = regions[label[x]];
-                const Region& right = regions[label[x + 1]];
-                const int edge = std::min(leftStripe, rightStripe);
-                // Weights per channel: expected sign / range, walking left to right.
-                const std::array<std::int8_t, 3>& sign = kSymbolSigns[ws.pattern.edgeSymbol(edge)];
-                const float orientation = rightStripe > leftStripe ? 1.0f : -1.0f;
-                cv::Vec3f weight;
-                for (int c = 0; c < 3; ++c)
-                    weight[c] = orientation * static_cast<float>(sign[c]) / std::max(0.5f * (left.range[c] + right.range[c]), 1.0f);
-                // Projected gradient at half-pixel positions i + 0.5, i in
-                // [x - kReach, x + kReach]: every sample both searches below
-                // can read. Near the image border the samples past it are
-                // -inf, which never wins the peak search, so that search has
-                // fixed bounds (unrolled: 5 selects, not a loop with clamped
-                // bounds; depth 24.0 -> 22.3 M instructions at 780x580). The
-                // last sample is read only by the centroid of a peak at
-                // x + kSearchRadius: it is computed then, so most edges take
-                // 8 samples (two kernel steps of 4) rather than 9 (three).
-                constexpr int kReach = 2 * kSearchRadius;
-                const int lo = std::max(x - kReach, 0), hi = std::min(x + kReach, w - 2);
-                std::array<float, 2 * kReach + 1> samples;
-                const bool lastLater = hi - lo + 1 == static_cast<int>(samples.size());
-                if (!lastLater) samples.fill(-std::numeric_limits<float>::infinity());
-                auto sample = [&](int i) -> float& { return samples[i - x + kReach]; };
-                projectedGradients(row, lo, hi - lo + 1 - lastLater, ws.rgbOffset, m, weight, &sample(lo));
-                int peak = x;
-                float peakValue = sample(x);
-                for (int i = x - kSearchRadius; i <= x + kSearchRadius; ++i) {
-                    const float g = sample(i);
-                    const bool higher = g > peakValue;  // selects, not a branch: which sample wins is noise
-                    peak = higher ? i : peak;
-                    peakValue = higher ? g : peakValue;
-                }
-                // The peak must lie inside the search window with its whole
-                // centroid window in the image: an edge whose profile the image
-                // border cuts off cannot be located.
-                if (!(peakValue > 0) || peak - kSearchRadius < 0 || peak + kSearchRadius > w - 2) continue;
-                if (lastLater && peak == x + kSearchRadius)
-                    projectedGradients(row, hi, 1, ws.rgbOffset, m, weight, &sample(hi));
-                // Centroid of the peak's samples above a quarter of its height:
-                // averages the noise over ~3 samples, and the threshold keeps the
-                // tails of the neighbouring stripe edges out.
-                // Branch-free (the test above keeps the window in the image): a
-                // sample below the threshold adds a zero, which leaves the sums
-                // as they are, bit for bit (they start at +0 and are never -0).
-                // The zero by a mask: GCC compiles std::max(d, 0.0f) here as a
-                // branch, mispredicted 33 000 times per 780x580 frame.
-                float sum = 0, moment = 0;
-                for (int i = peak - kSearchRadius; i <= peak + kSearchRadius; ++i) {
-                    const float d = sample(i) - kCentroidThreshold * peakValue;
-                    const float g = std::bit_cast<float>(std::bit_cast<std::uint32_t>(d) & -static_cast<std::uint32_t>(d > 0));
-                    sum += g;
-                    moment += g * static_cast<float>(i - peak);
-                }
-                const float offset = moment / sum;
-                const double u = peak + 0.5 + offset;
-                const auto point = RigModel::intersectRay(rays.at(u), ws.lightPlanes[edge]);
-                if (!point) continue;
-                const ScanPoint scanPoint{cv::Vec3f(static_cast<float>((*point)[0]), static_cast<float>((*point)[1]),
-                                                    static_cast<float>((*point)[2])),
-                                          cv::Point2f(static_cast<float>(u), static_cast<float>(y)), edge};
-                // Along one projector ray the camera depth grows with the
-                // distance from the projector: the smaller z is the lit point.
-                if (const int earlier = rowPoint[edge]; earlier >= 0) {
-                    if (scanPoint.position[2] < ws.points[earlier].position[2]) ws.points[earlier] = scanPoint;
-                    continue;
-                }
-                if (ws.pointCount == ws.maxPoints) {
-                    ws.truncated = true;
-                    return;
-                }
-                rowPoint[edge] = ws.pointCount;
-                ws.points[ws.pointCount++] = scanPoint;
+        forEachBorder(label, label + 1, w - 1, [&](int x) {
+            if (full) return;
+            const int leftStripe = stripes[label[x]], rightStripe = stripes[label[x + 1]];
+            if (leftStripe < 0 || rightStripe < 0 || std::abs(leftStripe - rightStripe) != 1) return;
+            const Region& left = regions[label[x]];
+            const Region& right = regions[label[x + 1]];
+            const int edge = std::min(leftStripe, rightStripe);
+            // Weights per channel: expected sign / range, walking left to right.
+            const std::array<std::int8_t, 3>& sign = kSymbolSigns[ws.pattern.edgeSymbol(edge)];
+            const float orientation = rightStripe > leftStripe ? 1.0f : -1.0f;
+            cv::Vec3f weight;
+            for (int c = 0; c < 3; ++c)
+                weight[c] = orientation * static_cast<float>(sign[c]) / std::max(0.5f * (left.range[c] + right.range[c]), 1.0f);
+            // Projected gradient at half-pixel positions i + 0.5, i in
+            // [x - kReach, x + kReach]: every sample both searches below
+            // can read. Near the image border the samples past it are
+            // -inf, which never wins the peak search, so that search has
+            // fixed bounds (unrolled: 5 selects, not a loop with clamped
+            // bounds; depth 24.0 -> 22.3 M instructions at 780x580). The
+            // last sample is read only by the centroid of a peak at
+            // x + kSearchRadius: it is computed then, so most edges take
+            // 8 samples (two kernel steps of 4) rather than 9 (three).
+            constexpr int kReach = 2 * kSearchRadius;
+            const int lo = std::max(x - kReach, 0), hi = std::min(x + kReach, w - 2);
+            std::array<float, 2 * kReach + 1> samples;
+            const bool lastLater = hi - lo + 1 == static_cast<int>(samples.size());
+            if (!lastLater) samples.fill(-std::numeric_limits<float>::infinity());
+            auto sample = [&](int i) -> float& { return samples[i - x + kReach]; };
+            projectedGradients(row, lo, hi - lo + 1 - lastLater, ws.rgbOffset, m, weight, &sample(lo));
+            int peak = x;
+            float peakValue = sample(x);
+            for (int i = x - kSearchRadius; i <= x + kSearchRadius; ++i) {
+                const float g = sample(i);
+                const bool higher = g > peakValue;  // selects, not a branch: which sample wins is noise
+                peak = higher ? i : peak;
+                peakValue = higher ? g : peakValue;
             }
-        }
+            // The peak must lie inside the search window with its whole
+            // centroid window in the image: an edge whose profile the image
+            // border cuts off cannot be located.
+            if (!(peakValue > 0) || peak - kSearchRadius < 0 || peak + kSearchRadius > w - 2) return;
+            if (lastLater && peak == x + kSearchRadius)
+                projectedGradients(row, hi, 1, ws.rgbOffset, m, weight, &sample(hi));
+            // Centroid of the peak's samples above a quarter of its height:
+            // averages the noise over ~3 samples, and the threshold keeps the
+            // tails of the neighbouring stripe edges out.
+            // Branch-free (the test above keeps the window in the image): a
+            // sample below the threshold adds a zero, which leaves the sums
+            // as they are, bit for bit (they start at +0 and are never -0).
+            // The zero by a mask: GCC compiles std::max(d, 0.0f) here as a
+            // branch, mispredicted 33 000 times per 780x580 frame.
+            float sum = 0, moment = 0;
+            for (int i = peak - kSearchRadius; i <= peak + kSearchRadius; ++i) {
+                const float d = sample(i) - kCentroidThreshold * peakValue;
+                const float g = std::bit_cast<float>(std::bit_cast<std::uint32_t>(d) & -static_cast<std::uint32_t>(d > 0));
+                sum += g;
+                moment += g * static_cast<float>(i - peak);
+            }
+            const float offset = moment / sum;
+            const double u = peak + 0.5 + offset;
+            const auto point = RigModel::intersectRay(rays.at(u), ws.lightPlanes[edge]);
+            if (!point) return;
+            const ScanPoint scanPoint{cv::Vec3f(static_cast<float>((*point)[0]), static_cast<float>((*point)[1]),
+                                                static_cast<float>((*point)[2])),
+                                      cv::Point2f(static_cast<float>(u), static_cast<float>(y)), edge};
+            // Along one projector ray the camera depth grows with the
+            // distance from the projector: the smaller z is the lit point.
+            if (const int earlier = rowPoint[edge]; earlier >= 0) {
+                if (scanPoint.position[2] < ws.points[earlier].position[2]) ws.points[earlier] = scanPoint;
+                return;
+            }
+            if (ws.pointCount == ws.maxPoints) {
+                ws.truncated = full = true;
+                return;
+            }
+            rowPoint[edge] = ws.pointCount;
+            ws.points[ws.pointCount++] = scanPoint;
+        });
+        if (full) return;
     }
 }
 

@@ -11,7 +11,6 @@
 #include "pipeline/decoder/workspace.hpp"
 
 #include <algorithm>
-#include <bit>
 #include <cmath>
 
 namespace stria::pipeline {
@@ -105,29 +104,23 @@ void buildGraph(DecoderWorkspace& ws)
     };
 
     // The border pairs of each row in raster order, horizontal then
-    // vertical, from bit masks of 64 neighbour comparisons.
+    // vertical.
     for (int y = 0; y < h; ++y) {
         const std::int32_t* row = label + static_cast<std::ptrdiff_t>(y) * w;
         const std::uint8_t* up = ws.frame.row(std::max(y - 1, 0));
         const std::uint8_t* pixels = ws.frame.row(y);
         const std::uint8_t* down = ws.frame.row(std::min(y + 1, h - 1));
-        for (int x0 = 0; x0 + 1 < w; x0 += 64)
-            for (std::uint64_t bits = borderMask(row + x0, row + x0 + 1, std::min(64, w - 1 - x0)); bits;
-                 bits &= bits - 1) {
-                const int x = x0 + std::countr_zero(bits);
-                addPair(row[x], row[x + 1], true,
-                        x + 2 < w ? horizontalPairGradient(up, pixels, down, x, ws.primary)
-                                  : pairGradient(ws.frame, x, y, true, ws.primary));
-            }
+        forEachBorder(row, row + 1, w - 1, [&](int x) {
+            addPair(row[x], row[x + 1], true,
+                    x + 2 < w ? horizontalPairGradient(up, pixels, down, x, ws.primary)
+                              : pairGradient(ws.frame, x, y, true, ws.primary));
+        });
         if (y + 1 < h)
-            for (int x0 = 0; x0 < w; x0 += 64)
-                for (std::uint64_t bits = borderMask(row + x0, row + x0 + w, std::min(64, w - x0)); bits;
-                     bits &= bits - 1) {
-                    const int x = x0 + std::countr_zero(bits);
-                    addPair(row[x], row[x + w], false,
-                            x > 0 && x + 2 < w ? verticalPairGradient(pixels, down, x, ws.primary)
-                                               : pairGradient(ws.frame, x, y, false, ws.primary));
-                }
+            forEachBorder(row, row + w, w, [&](int x) {
+                addPair(row[x], row[x + w], false,
+                        x > 0 && x + 2 < w ? verticalPairGradient(pixels, down, x, ws.primary)
+                                           : pairGradient(ws.frame, x, y, false, ws.primary));
+            });
     }
 
     // Incidence lists (CSR).

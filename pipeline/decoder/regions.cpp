@@ -6,7 +6,7 @@
 // corrected for camera crosstalk.
 //
 // Two raster passes over the runs of equal labels in each row (their ends
-// from borderMask, without a branch per pixel): the first counts each
+// from forEachBorder, without a branch per pixel): the first counts each
 // region's pixels and sums their coordinates; the second, with the counts as
 // offsets (a counting sort by label), copies each run's pixels, 4 bytes each,
 // into the watershed's order buffer, where each region's pixels then lie
@@ -17,7 +17,6 @@
 #include "pipeline/decoder/workspace.hpp"
 
 #include <algorithm>
-#include <bit>
 #include <cstring>
 
 namespace stria::pipeline {
@@ -47,13 +46,10 @@ void computeRegions(DecoderWorkspace& ws)
         for (int y = 0; y < h; ++y) {
             const std::int32_t* row = label + static_cast<std::ptrdiff_t>(y) * w;
             int x = 0;
-            for (int x0 = 0; x0 + 1 < w; x0 += 64)
-                for (std::uint64_t ends = borderMask(row + x0, row + x0 + 1, std::min(64, w - 1 - x0)); ends;
-                     ends &= ends - 1) {
-                    const int end = x0 + std::countr_zero(ends) + 1;
-                    run(x, end, y, row[x]);
-                    x = end;
-                }
+            forEachBorder(row, row + 1, w - 1, [&](int last) {
+                run(x, last + 1, y, row[x]);
+                x = last + 1;
+            });
             run(x, w, y, row[x]);
         }
     };

@@ -6,7 +6,9 @@
 
 #include <opencv2/core.hpp>
 
+#include <algorithm>
 #include <array>
+#include <bit>
 #include <cstdint>
 
 namespace stria::pipeline {
@@ -54,6 +56,16 @@ std::array<std::uint8_t, 3> channelMedians(const std::uint32_t* pixels, int coun
 // b = a + width those to the row below.
 std::uint64_t borderMaskReference(const std::int32_t* a, const std::int32_t* b, int count);
 std::uint64_t borderMask(const std::int32_t* a, const std::int32_t* b, int count);
+// Calls visit(i) for each i < count with a[i] != b[i], in increasing order,
+// from borderMask's 64-bit masks: no branch per pixel (whether neighbours
+// share a label is noise to a branch predictor), one per border.
+template <class Visit>
+inline void forEachBorder(const std::int32_t* a, const std::int32_t* b, int count, Visit&& visit)
+{
+    for (int i0 = 0; i0 < count; i0 += 64)
+        for (std::uint64_t bits = borderMask(a + i0, b + i0, std::min(64, count - i0)); bits; bits &= bits - 1)
+            visit(i0 + std::countr_zero(bits));
+}
 // Eq. 8's terms of one border pixel pair: the image gradient at the pair's
 // middle, summed over the channels as |component along primary| and
 // |component across it|. The reference is pairGradient (workspace.hpp), for

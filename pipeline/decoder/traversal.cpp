@@ -168,8 +168,7 @@ private:
         SeedKey* other = reinterpret_cast<SeedKey*>(ws_.open.get());
         for (int i = 0; i < count; ++i) {
             const int e = ws_.edgeOrder[i];
-            keys[i].value =
-                static_cast<std::uint64_t>(orderedBits(ws_.edges[e].bestError)) << 32 | static_cast<std::uint32_t>(e);
+            keys[i].value = orderKey(ws_.edges[e].bestError, e);
         }
         for (int shift = 32; shift < 64; shift += kRadixBits) {
             std::array<std::int32_t, 1 << kRadixBits> start{};
@@ -184,11 +183,15 @@ private:
         for (int i = 0; i < count; ++i) ws_.edgeOrder[i] = static_cast<std::int32_t>(keys[i].value & 0xffffffffu);
     }
 
-    // Unsigned integers in the order of the floats (not NaN; -0 as +0).
-    static std::uint32_t orderedBits(float value)
+    // An error and an index (edge or region) as one 64-bit key in the order
+    // (error, index): the error's bits made an unsigned integer in the order
+    // of the floats (not NaN; -0 as +0) in the high half, the index in the
+    // low half.
+    static std::uint64_t orderKey(float error, std::int32_t index)
     {
-        const std::uint32_t bits = std::bit_cast<std::uint32_t>(value + 0.0f);
-        return bits & 0x80000000u ? ~bits : bits | 0x80000000u;
+        const std::uint32_t bits = std::bit_cast<std::uint32_t>(error + 0.0f);
+        const std::uint32_t ordered = bits & 0x80000000u ? ~bits : bits | 0x80000000u;
+        return static_cast<std::uint64_t>(ordered) << 32 | static_cast<std::uint32_t>(index);
     }
 
     // Step 1. Returns true when the path was unique and its regions are assigned.
@@ -368,8 +371,7 @@ private:
             }
             // The heap key orders by error, then region: the pushed errors
             // are below A or tokenErrorLimit, so never NaN.
-            pushOpen({static_cast<std::uint64_t>(orderedBits(h.error)) << 32 | static_cast<std::uint32_t>(to),
-                      h.positionError, h.reference, static_cast<std::int16_t>(h.stripe),
+            pushOpen({orderKey(h.error, to), h.positionError, h.reference, static_cast<std::int16_t>(h.stripe),
                       static_cast<std::int16_t>(tokens)});
         }
     }
@@ -588,7 +590,7 @@ private:
         ws_.decodedRegions = 0;
         for (int r = 0; r < ws_.regionCount; ++r) {
             if (regions[r].stripe < 0) continue;
-            if (size[regions[r].component] < ws_.params.minComponentRegions) regions[r].stripe = -1;
+            if (size[regions[r].component] < ws_.params.minComponentRegions) undecode(r);
             else ++ws_.decodedRegions;
         }
     }
