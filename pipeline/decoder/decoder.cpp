@@ -98,6 +98,9 @@ Result<std::unique_ptr<Decoder>> Decoder::create(const StripePattern& pattern, c
     ws->maxRegions = params.maxSuperpixels > 0 ? params.maxSuperpixels : std::max<int>(16, static_cast<int>(n / 16));
     ws->maxEdges = params.maxGraphEdges > 0 ? params.maxGraphEdges : 3 * ws->maxRegions;
     ws->maxPoints = params.maxPoints > 0 ? params.maxPoints : std::max<int>(16, static_cast<int>(n / 6));
+    if (ws->maxRegions > (1 << EdgeFeature::kEndBits))
+        return Status::error("decoder: " + std::to_string(ws->maxRegions) + " superpixels: at most " +
+                             std::to_string(1 << EdgeFeature::kEndBits) + " are supported");
 
     std::size_t& bytes = ws->allocatedBytes;
     ws->gradient = allocate<std::uint8_t>(n, bytes);
@@ -109,6 +112,7 @@ Result<std::unique_ptr<Decoder>> Decoder::create(const StripePattern& pattern, c
     ws->scratch = allocate<std::int32_t>(scratchEntries(w, h, ws->maxRegions, ws->maxEdges), bytes);
     ws->regions = allocate<Region>(ws->maxRegions, bytes);
     ws->edges = allocate<GraphEdge>(ws->maxEdges, bytes);
+    ws->edgeFeatures = allocate<EdgeFeature>(ws->maxEdges, bytes);
     ws->adjacency = allocate<std::int32_t>(2 * static_cast<std::size_t>(ws->maxEdges), bytes);
     ws->edgeOrder = allocate<std::int32_t>(ws->maxEdges, bytes);
     ws->maxOpen = std::max(16, ws->maxEdges / 2);

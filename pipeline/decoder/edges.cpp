@@ -170,13 +170,13 @@ SymbolCode optimalSymbol(const std::array<float, 3>& c, float t)
 
 void computeEdgeFeatures(DecoderWorkspace& ws)
 {
-    // One pass over the edges (they are ~1 MB at 780x580: three passes
-    // streamed them three times); the ranges are maxima, so the order in
-    // which the edges raise them does not matter.
+    // One pass over the edges (three passes streamed them three times); the
+    // ranges are maxima, so the order in which the edges raise them does not
+    // matter.
     Region* regions = ws.regions.get();
-    const float t = static_cast<float>(ws.params.t), alpha = static_cast<float>(ws.params.alpha);
+    const float t = static_cast<float>(ws.params.t);
     for (int e = 0; e < ws.edgeCount; ++e) {
-        GraphEdge& edge = ws.edges[e];
+        const GraphEdge& edge = ws.edges[e];
         Region& a = regions[edge.a];
         Region& b = regions[edge.b];
         // Direction (fig. 5): the border's normal (from a to b); if the
@@ -195,24 +195,30 @@ void computeEdgeFeatures(DecoderWorkspace& ws)
         // Arithmetic, not branches: the direction of one edge says nothing
         // about the next one's.
         const bool parallel = length2 == 0 || 2 * along * along < length2;
-        edge.direction = static_cast<EdgeDirection>(!parallel * (2 * (along > 0) - 1));
+        const auto direction = static_cast<EdgeDirection>(!parallel * (2 * (along > 0) - 1));
         for (int c = 0; c < 3; ++c) {
             const float change = std::abs(b.color[c] - a.color[c]);
             a.range[c] = std::max(a.range[c], change);
             b.range[c] = std::max(b.range[c], change);
         }
         const EqualizedChange change = equalizedChange(ws, edge.a, edge.b);
-        edge.weight = change.weight;
+        EdgeFeature& feature = ws.edgeFeatures[e];
+        feature.weight = change.weight;
         // Symbols and their errors are only tested across the stripes (the
         // traversal's seeds, paths and links; along them it tests null
-        // edges): an edge along them keeps the defaults.
-        if (edge.direction == EdgeDirection::Parallel) continue;
-        edge.gradientError = edge.primaryGradient > 0
-                                 ? std::min(edge.secondaryGradient / edge.primaryGradient, kMaxGradientError)
-                                 : kMaxGradientError;
-        edge.bestSymbol = optimalSymbol(change.c, t);
-        edge.bestMatch = symbolError(change, edge.bestSymbol, t);
-        edge.bestError = edge.bestMatch + alpha * edge.gradientError;
+        // edges).
+        if (direction == EdgeDirection::Parallel) {
+            feature.packed = EdgeFeature::pack(edge.a, edge.b, direction, kNullSymbol);
+            feature.bestMatch = 0;
+            feature.gradientError = 0;
+            continue;
+        }
+        const SymbolCode bestSymbol = optimalSymbol(change.c, t);
+        feature.packed = EdgeFeature::pack(edge.a, edge.b, direction, bestSymbol);
+        feature.gradientError = edge.primaryGradient > 0
+                                    ? std::min(edge.secondaryGradient / edge.primaryGradient, kMaxGradientError)
+                                    : kMaxGradientError;
+        feature.bestMatch = symbolError(change, bestSymbol, t);
     }
 }
 

@@ -62,22 +62,22 @@ struct Hypothesis {
 // The helpers down to stripeSymbol select by arithmetic, not branches: which
 // end of an edge a walk comes from (`from` is a or b), and which way along
 // the pattern, is data (callgrind's branch model: 29 000 fewer mispredictions
-// per 780x580 decode, with the seed count in run()).
-EdgeDirection directionFrom(const GraphEdge& edge, int from)
+// per 780x580 decode, with the seed count in run()). The features are stored
+// as seen from a, the smaller end; `to` is the other end.
+EdgeDirection directionFrom(const EdgeFeature& edge, int from, int to)
 {
-    return static_cast<EdgeDirection>(static_cast<int>(edge.direction) * (2 * (from == edge.a) - 1));
+    return static_cast<EdgeDirection>(static_cast<int>(edge.direction()) * (2 * (from < to) - 1));
 }
-
-int otherEnd(const GraphEdge& edge, int from) { return edge.a ^ edge.b ^ from; }
 
 // The edge's optimal symbol seen from `from`. Its error, edge.bestMatch, holds
 // from either side: the change from b is the negated change from a, and
 // symbolError of the negated change and the reversed symbol is the same
 // arithmetic on negated values, so the same float.
-SymbolCode bestSymbolFrom(const GraphEdge& edge, int from)
+SymbolCode bestSymbolFrom(const EdgeFeature& edge, int from, int to)
 {
-    const bool fromA = from == edge.a;
-    return static_cast<SymbolCode>(fromA * edge.bestSymbol + !fromA * reversedSymbol(edge.bestSymbol));
+    const bool fromA = from < to;
+    const SymbolCode symbol = edge.bestSymbol();
+    return static_cast<SymbolCode>(fromA * symbol + !fromA * reversedSymbol(symbol));
 }
 
 // Pattern symbol seen when walking from stripe `from` to the neighbouring stripe `to`.
@@ -91,8 +91,9 @@ SymbolCode stripeSymbol(const StripePattern& pattern, int from, int to)
 class Traversal {
 public:
     explicit Traversal(DecoderWorkspace& ws)
-        : ws_(ws), t_(static_cast<float>(ws.params.t)), alpha_(static_cast<float>(ws.params.alpha)),
-          A_(static_cast<float>(ws.params.A)), beta_(static_cast<float>(ws.params.beta))
+        : ws_(ws), features_(ws.edgeFeatures.get()), t_(static_cast<float>(ws.params.t)),
+          alpha_(static_cast<float>(ws.params.alpha)), A_(static_cast<float>(ws.params.A)),
+          beta_(static_cast<float>(ws.params.beta))
     {
     }
 
@@ -114,7 +115,7 @@ public:
         int seeds = 0;
         for (int e = 0; e < ws_.edgeCount; ++e) {  // without a branch: which edges qualify is data
             ws_.edgeOrder[seeds] = e;
-            seeds += (ws_.edges[e].direction != EdgeDirection::Parallel) & (ws_.edges[e].bestError < A_);
+            seeds += (features_[e].direction() != EdgeDirection::Parallel) & (bestError(features_[e]) < A_);
         }
         sortSeeds(seeds);
         ws_.passCount = 0;
@@ -132,11 +133,14 @@ public:
     }
 
 private:
+    // Eq. 9 for the edge's optimal symbol (parallel edges: 0).
+    float bestError(const EdgeFeature& edge) const { return edge.bestMatch + alpha_ * edge.gradientError; }
+
     // Eq. 9 for `symbol` on `edge` walked from `from` to `to`, and eq. 10
     // into positionError if given.
-    float edgeError(int from, int to, const GraphEdge& edge, SymbolCode symbol, float* positionError) const
+    float edgeError(int from, int to, const EdgeFeature& edge, SymbolCode symbol, float* positionError) const
     {
-        const float match = bestSymbolFrom(edge, from) == symbol
+        const float match = bestSymbolFrom(edge, from, to) == symbol
                                 ? edge.bestMatch
                                 : symbolError(equalizedChange(ws_, from, to), symbol, t_);
         if (positionError) *positionError = beta_ * match / std::max(edge.weight, 1.0f) + edge.gradientError;
@@ -168,7 +172,7 @@ private:
         SeedKey* other = reinterpret_cast<SeedKey*>(ws_.open.get());
         for (int i = 0; i < count; ++i) {
             const int e = ws_.edgeOrder[i];
-            keys[i].value = orderKey(ws_.edges[e].bestError, e);
+            keys[i].value = orderKey(bestError(features_[e]), e);
         }
         for (int shift = 32; shift < 64; shift += kRadixBits) {
             std::array<std::int32_t, 1 << kRadixBits> start{};
@@ -199,14 +203,14 @@ private:
     {
         const StripePattern& pattern = ws_.pattern;
         const GraphEdge& seed = ws_.edges[seedEdge];
-        const bool forward = seed.direction == EdgeDirection::Forward;
+        const bool forward = features_[seedEdge].direction() == EdgeDirection::Forward;
         std::int32_t* path = ws_.pathVertices.get();
         const int maxPath = pattern.window() + 1;
         // The path is path[begin, end), left to right; room to grow either way.
         int begin = maxPath, end = maxPath;
         path[end++] = forward ? seed.a : seed.b;
         path[end++] = forward ? seed.b : seed.a;
-        const SymbolCode symbol = forward ? seed.bestSymbol : reversedSymbol(seed.bestSymbol);
+        const SymbolCode symbol = bestSymbolFrom(features_[seedEdge], path[end - 2], path[end - 1]);
         // candidates: pattern edge index of the path's first edge.
         int count = 0;
         for (int p : pattern.edgesWithSymbol(symbol)) ws_.candidates[count++] = p;
@@ -220,15 +224,15 @@ private:
                 const int endRegion = left ? path[begin] : path[end - 1];
                 const Region& r = ws_.regions[endRegion];
                 for (int i = 0; i < r.degree; ++i) {
-                    const GraphEdge& edge = ws_.edges[ws_.adjacency[r.adjacencyBegin + i]];
-                    if (directionFrom(edge, endRegion) != (left ? EdgeDirection::Backward : EdgeDirection::Forward))
+                    const EdgeFeature& edge = features_[ws_.adjacency[r.adjacencyBegin + i]];
+                    const int next = edge.otherEnd(endRegion);
+                    if (directionFrom(edge, endRegion, next) != (left ? EdgeDirection::Backward : EdgeDirection::Forward))
                         continue;
-                    const int next = otherEnd(edge, endRegion);
                     if (stripes_[next] >= 0 || std::find(path + begin, path + end, next) != path + end)
                         continue;
                     // The change is computed for the first symbol other than
                     // the optimal one (whose error the edge stage left).
-                    const SymbolCode best = bestSymbolFrom(edge, endRegion);
+                    const SymbolCode best = bestSymbolFrom(edge, endRegion, next);
                     std::optional<EqualizedChange> change;
                     SymbolCode tried = kNullSymbol;  // each required symbol once per edge
                     for (int c = 0; c < count; ++c) {
@@ -280,8 +284,8 @@ private:
         for (int i = 0; i + 1 < length; ++i) {
             const int l = path[begin + i], r = path[begin + i + 1];
             for (int k = 0; k < ws_.regions[l].degree; ++k) {
-                const GraphEdge& edge = ws_.edges[ws_.adjacency[ws_.regions[l].adjacencyBegin + k]];
-                if (otherEnd(edge, l) != r) continue;
+                const EdgeFeature& edge = features_[ws_.adjacency[ws_.regions[l].adjacencyBegin + k]];
+                if (edge.otherEnd(l) != r) continue;
                 float q = 0;
                 edgeError(l, r, edge, stripeSymbol(ws_.pattern, first + i, first + i + 1), &q);
                 ws_.regions[l].positionError = std::min(ws_.regions[l].positionError, q);
@@ -293,11 +297,12 @@ private:
         return true;
     }
 
-    // The best way to reach `to` from decoded region `from` over `edge` (in
+    // The best way to reach `to` from decoded region `from` over edge `e` (in
     // direction `dir` from `from`), if any; referenceWeight is the weight of
     // the edge from `from`'s reference region (0 without one).
-    Hypothesis bestHypothesis(int from, int to, const GraphEdge& edge, EdgeDirection dir, float referenceWeight) const
+    Hypothesis bestHypothesis(int from, int to, int e, EdgeDirection dir, float referenceWeight) const
     {
+        const EdgeFeature& edge = features_[e];
         const StripePattern& pattern = ws_.pattern;
         const Region& f = ws_.regions[from];
         Hypothesis best;
@@ -327,9 +332,11 @@ private:
                 const SymbolCode expected = stripeSymbol(pattern, ref.stripe, f.stripe);
                 const EqualizedChange change = equalizedChange(ws_, f.reference, to);
                 if (optimalSymbol(change.c, t_) == expected) {
-                    const float border = (edge.primaryGradient + edge.secondaryGradient) / std::max(edge.borderCount, 1);
+                    const GraphEdge& border = ws_.edges[e];
+                    const float meanGradient =
+                        (border.primaryGradient + border.secondaryGradient) / std::max(border.borderCount, 1);
                     const float error = matchError(change.c, expected, t_) +
-                                        kNullBorderWeight * border / std::max(referenceWeight, 1.0f);
+                                        kNullBorderWeight * meanGradient / std::max(referenceWeight, 1.0f);
                     if (error < best.error)
                         best = {error, beta_ * error / std::max(change.weight, 1.0f), f.stripe, f.reference};
                 }
@@ -346,16 +353,17 @@ private:
             for (int c = 0; c < 3; ++c)
                 referenceWeight = std::max(referenceWeight, std::abs(f.color[c] - ws_.regions[f.reference].color[c]));
         for (int i = 0; i < f.degree; ++i) {
-            const GraphEdge& edge = ws_.edges[ws_.adjacency[f.adjacencyBegin + i]];
-            const int to = otherEnd(edge, from);
+            const int e = ws_.adjacency[f.adjacencyBegin + i];
+            const EdgeFeature& edge = features_[e];
+            const int to = edge.otherEnd(from);
             const int toStripe = stripes_[to];
             if (toStripe == f.stripe) continue;
             // Across the stripes the only hypothesis is the next stripe: a
             // neighbour that holds it already needs no error evaluated (most
             // neighbours of a decoded region, in the interior of a pass).
-            const EdgeDirection dir = directionFrom(edge, from);
+            const EdgeDirection dir = directionFrom(edge, from, to);
             if (dir != EdgeDirection::Parallel && toStripe == f.stripe + static_cast<int>(dir)) continue;
-            const Hypothesis h = bestHypothesis(from, to, edge, dir, referenceWeight);
+            const Hypothesis h = bestHypothesis(from, to, e, dir, referenceWeight);
             if (h.stripe < 0 || h.stripe == toStripe) continue;
             int tokens = f.tokens;
             if (h.error < A_) {
@@ -449,13 +457,14 @@ private:
         std::int32_t* link = ws_.edgeOrder.get();
         for (int e = 0; e < ws_.edgeCount; ++e) {
             const GraphEdge& edge = ws_.edges[e];
+            const EdgeDirection direction = features_[e].direction();
             link[e] = kNoLink;
             const int sa = stripes_[edge.a], sb = stripes_[edge.b];
-            if (sa < 0 || sb < 0 || edge.direction == EdgeDirection::Parallel) continue;
-            const int step = edge.direction == EdgeDirection::Forward ? 1 : -1;  // b = a + step if consecutive
+            if (sa < 0 || sb < 0 || direction == EdgeDirection::Parallel) continue;
+            const int step = direction == EdgeDirection::Forward ? 1 : -1;  // b = a + step if consecutive
             if (sb == sa) link[e] = kSameStripe;
             else if (sb == sa + step &&
-                     edgeError(edge.a, edge.b, edge, stripeSymbol(ws_.pattern, sa, sb), nullptr) < limit)
+                     edgeError(edge.a, edge.b, features_[e], stripeSymbol(ws_.pattern, sa, sb), nullptr) < limit)
                 link[e] = kConfirmedLink;
         }
     }
@@ -478,32 +487,33 @@ private:
         std::int32_t* reject = ws_.componentSize.get();  // flags, before the component sizes are counted
         for (int v = 0; v < ws_.regionCount; ++v) {
             reject[v] = 0;
+            const int stripe = stripes_[v];
+            if (stripe < 0) continue;
             const Region& r = ws_.regions[v];
-            if (r.stripe < 0) continue;
             int support = 0, contradiction = 0;
             const float weakEdge = static_cast<float>(ws_.params.nullEdgeRatio) * maxChannelRange(r);
             for (int i = 0; i < r.degree; ++i) {
                 const int edgeIndex = ws_.adjacency[r.adjacencyBegin + i];
-                const GraphEdge& edge = ws_.edges[edgeIndex];
-                const EdgeDirection dir = directionFrom(edge, v);
-                const int w = otherEnd(edge, v);
+                const EdgeFeature& edge = features_[edgeIndex];
+                const int w = edge.otherEnd(v);
+                const EdgeDirection dir = directionFrom(edge, v, w);
                 const int neighbour = stripes_[w];
                 if (dir == EdgeDirection::Parallel) {
                     // Along the stripes the stripe stays: a weak edge to a
                     // region decoded as another stripe contradicts one of them.
-                    if (neighbour >= 0 && neighbour != r.stripe && edge.weight < weakEdge)
-                        contradiction += kAlongStripeWeight * edge.borderCount;
+                    if (neighbour >= 0 && neighbour != stripe && edge.weight < weakEdge)
+                        contradiction += kAlongStripeWeight * ws_.edges[edgeIndex].borderCount;
                     continue;
                 }
-                const int expected = r.stripe + (dir == EdgeDirection::Forward ? 1 : -1);
-                if (neighbour == r.stripe) continue;  // a null edge within the stripe
+                const int expected = stripe + (dir == EdgeDirection::Forward ? 1 : -1);
+                if (neighbour == stripe) continue;  // a null edge within the stripe
                 bool fits = false;
                 if (neighbour == expected) fits = link[edgeIndex] == kConfirmedLink;
                 else if (neighbour < 0 && expected >= 0 && expected < pattern.stripeCount())
-                    fits = edgeError(v, w, edge, stripeSymbol(pattern, r.stripe, expected), nullptr) < limit;
-                if (fits) support += edge.borderCount;
+                    fits = edgeError(v, w, edge, stripeSymbol(pattern, stripe, expected), nullptr) < limit;
+                if (fits) support += ws_.edges[edgeIndex].borderCount;
                 else if (neighbour >= 0 || edge.weight >= weakEdge)
-                    contradiction += edge.borderCount;
+                    contradiction += ws_.edges[edgeIndex].borderCount;
             }
             reject[v] = contradiction > kContradictionRatio * support;
         }
@@ -543,7 +553,7 @@ private:
             const GraphEdge& edge = ws_.edges[e];
             if (link[e] == kNoLink || stripes_[edge.a] < 0 || stripes_[edge.b] < 0) continue;
             // lo = the region on the left (lower stripe side), hi = on the right.
-            const bool aLeft = edge.direction == EdgeDirection::Forward;
+            const bool aLeft = features_[e].direction() == EdgeDirection::Forward;
             pairs[2 * linkCount] = aLeft ? edge.a : edge.b;
             pairs[2 * linkCount + 1] = 2 * (aLeft ? edge.b : edge.a) + (link[e] == kConfirmedLink ? 1 : 0);
             ++linkCount;
@@ -565,7 +575,7 @@ private:
             if (!changed) break;
         }
         for (int v = 0; v < ws_.regionCount; ++v) {
-            const int stripe = ws_.regions[v].stripe;
+            const int stripe = stripes_[v];
             if (stripe < 0) continue;
             const bool unbounded = pattern.color(stripe) == 0 && (left(v) == 0 || right(v) == 0);
             if (left(v) + right(v) < window || unbounded) undecode(v);
@@ -586,16 +596,17 @@ private:
         std::fill(size, size + ws_.passCount, 0);
         Region* regions = ws_.regions.get();
         for (int r = 0; r < ws_.regionCount; ++r)
-            if (regions[r].stripe >= 0) ++size[regions[r].component];
+            if (stripes_[r] >= 0) ++size[regions[r].component];
         ws_.decodedRegions = 0;
         for (int r = 0; r < ws_.regionCount; ++r) {
-            if (regions[r].stripe < 0) continue;
+            if (stripes_[r] < 0) continue;
             if (size[regions[r].component] < ws_.params.minComponentRegions) undecode(r);
             else ++ws_.decodedRegions;
         }
     }
 
     DecoderWorkspace& ws_;
+    const EdgeFeature* features_;
     const float t_, alpha_, A_, beta_;
     std::int32_t* stripes_ = nullptr;  // the regions' stripes (run)
 };

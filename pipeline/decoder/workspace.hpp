@@ -45,16 +45,34 @@ struct GraphEdge {
     // horizontal pair, +-y for a vertical one): the chord of the border line.
     std::int16_t normalX = 0, normalY = 0;
     float primaryGradient = 0, secondaryGradient = 0;  // eq. 8 sums over the border pixels
-    float weight = 0;        // eq. 3: L-inf of the raw colour change
-    // gradientError, bestError, bestSymbol and bestMatch: set for edges across
-    // the stripes only (direction not Parallel), where symbols are tested.
-    float gradientError = 0; // eq. 8
-    float bestError = 0;     // eq. 9 for the optimal symbol
-    SymbolCode bestSymbol = kNullSymbol;  // eq. 7, seen from a to b
-    EdgeDirection direction = EdgeDirection::Parallel;
-    // symbolError of bestSymbol (bestError without the gradient term): the
-    // traversal tests this symbol on most edges it follows and reuses it.
+};
+
+// An edge's features (edges.cpp), apart from its GraphEdge: the traversal
+// visits edges along its regions' incidence lists, and 16 aligned bytes bring
+// one cache line per visit where a GraphEdge with them (44 bytes) brought one
+// or two; its passes over all edges read a third of the bytes.
+struct EdgeFeature {
+    // Bits 0-24: a ^ b (regions < 2^25, Decoder::create), so one end gives the
+    // other; bits 25-26: the direction seen from a, + 1; bits 27-31: bestSymbol.
+    std::uint32_t packed = 0;
+    float weight = 0;  // eq. 3: L-inf of the raw colour change
+    // bestMatch, gradientError and bestSymbol (eq. 7, seen from a to b): set
+    // for edges across the stripes only (direction not Parallel), where
+    // symbols are tested; else 0, 0 and kNullSymbol.
+    // bestMatch = symbolError of bestSymbol (eq. 9 without the gradient
+    // term): the traversal tests this symbol on most edges it follows.
     float bestMatch = 0;
+    float gradientError = 0;  // eq. 8
+
+    static constexpr int kEndBits = 25;
+    static std::uint32_t pack(int a, int b, EdgeDirection direction, SymbolCode bestSymbol)
+    {
+        return static_cast<std::uint32_t>(a ^ b) | static_cast<std::uint32_t>(static_cast<int>(direction) + 1) << kEndBits |
+               static_cast<std::uint32_t>(bestSymbol) << (kEndBits + 2);
+    }
+    int otherEnd(int from) const { return static_cast<int>(packed & ((1u << kEndBits) - 1)) ^ from; }
+    EdgeDirection direction() const { return static_cast<EdgeDirection>(static_cast<int>(packed >> kEndBits & 3) - 1); }
+    SymbolCode bestSymbol() const { return static_cast<SymbolCode>(packed >> (kEndBits + 2)); }
 };
 
 // A pending visit in the best-first propagation: a region is stripe
@@ -97,8 +115,9 @@ struct DecoderWorkspace {
     int maxRegions = 0, maxEdges = 0, maxPoints = 0;
     std::unique_ptr<Region[]> regions;
     std::unique_ptr<GraphEdge[]> edges;
+    std::unique_ptr<EdgeFeature[]> edgeFeatures;  // per edge (edges.cpp)
     std::unique_ptr<std::int32_t[]> adjacency;  // 2 * maxEdges incident edge indices (CSR)
-    std::unique_ptr<std::int32_t[]> edgeOrder;  // edges sorted by bestError (seeding order)
+    std::unique_ptr<std::int32_t[]> edgeOrder;  // edges sorted by eq. 9's error (seeding order)
     int maxOpen = 0;
     std::unique_ptr<OpenEntry[]> open;          // heap, maxOpen entries
     int openCount = 0;
