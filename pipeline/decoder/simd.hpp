@@ -10,6 +10,7 @@
 #include <array>
 #include <bit>
 #include <cstdint>
+#include <limits>
 
 namespace stria::pipeline {
 
@@ -33,6 +34,20 @@ void descentRowReference(const std::uint8_t* up, const std::uint8_t* row, const 
                          std::uint8_t* code);
 void descentRow(const std::uint8_t* up, const std::uint8_t* row, const std::uint8_t* down, int width,
                 std::uint8_t* code);
+// Code bit set on arrows the plateau pass added (code kPlateauArrow | direction).
+inline constexpr std::uint8_t kPlateauArrow = 4;
+// The label of a pixel whose basin is not known yet (and beyond the row's ends).
+inline constexpr std::int32_t kUnresolved = std::numeric_limits<std::int32_t>::min();
+// The watershed's row sweeps: each pixel of the row with an arrow up (plateau
+// or not) takes the label above it, then, from the left, each pixel with an
+// arrow left takes its left neighbour's label as it is by then, then, from
+// the right, each pixel with an arrow right its right neighbour's. Beyond the
+// row's ends the label is kUnresolved. above: width labels (in row 0, which
+// has no arrow up, any width readable labels, e.g. the row itself).
+// sweepRow takes 4 labels per step, runs of arrows by a prefix scan (GCC
+// vector extensions: SSE2 on x86-64, NEON on ARM).
+void sweepRowReference(const std::uint8_t* code, const std::int32_t* above, std::int32_t* row, int width);
+void sweepRow(const std::uint8_t* code, const std::int32_t* above, std::int32_t* row, int width);
 
 // Edge location (depth.cpp): for the count samples i = first, first + 1, ...
 // of a row, the colour change from pixel i to i + 1 (R G B at rgbOffset),

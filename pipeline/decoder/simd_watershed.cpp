@@ -1,7 +1,9 @@
-// Watershed descent kernel (pipeline/decoder/simd.hpp).
+// Watershed descent and row sweep kernels (pipeline/decoder/simd.hpp).
 #include "pipeline/decoder/simd.hpp"
 
 #include <algorithm>
+#include <bit>
+#include <cstring>
 
 #if defined(__ARM_NEON)
 #include <arm_neon.h>
@@ -70,6 +72,111 @@ void descentRow(const std::uint8_t* up, const std::uint8_t* row, const std::uint
     }
 #endif
     for (; x < width; ++x) descentPixel(up, row, down, width, x, code);
+}
+
+namespace {
+
+// Whether the code's arrow (plateau or not) points in the direction: bit 2
+// (kPlateauArrow) ignored, bit 3 (kDescentFlat) kept.
+constexpr std::uint8_t kArrowBits = 0xff & ~kPlateauArrow;
+
+// Four labels or lane masks, in GCC's vector extensions: one source for the
+// SSE2 and NEON instructions (shuffles, compares, and/or).
+using Lanes = std::int32_t __attribute__((vector_size(16)));
+
+inline Lanes load(const std::int32_t* p)
+{
+    Lanes v;
+    std::memcpy(&v, p, sizeof v);
+    return v;
+}
+
+inline void store(std::int32_t* p, Lanes v) { std::memcpy(p, &v, sizeof v); }
+
+// a in the lanes of mask m (-1), else b. (The vector ternary would compare m
+// with 0 first.)
+inline Lanes select(Lanes m, Lanes a, Lanes b) { return (a & m) | (b & ~m); }
+
+// The 4 codes of a block in each lane (byte k = pixel k): lane k's byte k is
+// pixel k's code, so one and-compare per direction gives the lane masks,
+// without widening the bytes.
+inline Lanes codesOf(const std::uint8_t* code)
+{
+    static_assert(std::endian::native == std::endian::little, "byte k of the word is pixel k");
+    std::int32_t c;
+    std::memcpy(&c, code, sizeof c);
+    return Lanes{c, c, c, c};
+}
+
+// -1 in the lanes whose code has an arrow in the direction, else 0.
+inline Lanes arrowsIn(Lanes codes, std::uint8_t direction)
+{
+    constexpr auto byteK = [](std::uint32_t value) {
+        return Lanes{static_cast<std::int32_t>(value), static_cast<std::int32_t>(value << 8),
+                     static_cast<std::int32_t>(value << 16), static_cast<std::int32_t>(value << 24)};
+    };
+    return (codes & byteK(kArrowBits)) == byteK(direction);
+}
+
+}  // namespace
+
+void sweepRowReference(const std::uint8_t* code, const std::int32_t* above, std::int32_t* row, int width)
+{
+    for (int x = 0; x < width; ++x)
+        if ((code[x] & kArrowBits) == kDescentUp) row[x] = above[x];
+    for (int x = 0; x < width; ++x)
+        if ((code[x] & kArrowBits) == kDescentLeft) row[x] = x > 0 ? row[x - 1] : kUnresolved;
+    for (int x = width - 1; x >= 0; --x)
+        if ((code[x] & kArrowBits) == kDescentRight) row[x] = x + 1 < width ? row[x + 1] : kUnresolved;
+}
+
+void sweepRow(const std::uint8_t* code, const std::int32_t* above, std::int32_t* row, int width)
+{
+    // A pixel copying its neighbour's label after the neighbour's own copy is
+    // a serial chain: as selects per pixel, 3 dependent instructions each.
+    // Here a block of 4 resolves its runs by a prefix scan in 2 shuffle
+    // steps (lane i takes lane i - 1, then i - 2, while its mask is set), and
+    // only the lanes that copy from beyond the block (their mask still set)
+    // take the previous block's label: the chain is one select per block.
+    const int blocks = width & ~3;
+    const Lanes outside{kUnresolved, kUnresolved, kUnresolved, kUnresolved};
+    Lanes carry = outside;  // the label left of the block, in every lane
+    for (int x = 0; x < blocks; x += 4) {
+        const Lanes codes = codesOf(code + x);
+        Lanes v = select(arrowsIn(codes, kDescentUp), load(above + x), load(row + x));
+        Lanes m = arrowsIn(codes, kDescentLeft);
+        v = select(m, __builtin_shuffle(v, Lanes{0, 0, 1, 2}), v);
+        m &= __builtin_shuffle(m, Lanes{0, 0, 1, 2});
+        v = select(m, __builtin_shuffle(v, Lanes{0, 1, 0, 1}), v);
+        m &= __builtin_shuffle(m, Lanes{0, 1, 0, 1});
+        v = select(m, carry, v);
+        store(row + x, v);
+        carry = __builtin_shuffle(v, Lanes{3, 3, 3, 3});
+    }
+    std::int32_t previous = carry[0];
+    for (int x = blocks; x < width; ++x) {
+        if ((code[x] & kArrowBits) == kDescentUp) row[x] = above[x];
+        if ((code[x] & kArrowBits) == kDescentLeft) row[x] = previous;
+        previous = row[x];
+    }
+    // The same from the right (the tail first), lanes mirrored.
+    std::int32_t next = kUnresolved;
+    for (int x = width - 1; x >= blocks; --x) {
+        if ((code[x] & kArrowBits) == kDescentRight) row[x] = next;
+        next = row[x];
+    }
+    carry = Lanes{next, next, next, next};
+    for (int x = blocks - 4; x >= 0; x -= 4) {
+        Lanes v = load(row + x);
+        Lanes m = arrowsIn(codesOf(code + x), kDescentRight);
+        v = select(m, __builtin_shuffle(v, Lanes{1, 2, 3, 3}), v);
+        m &= __builtin_shuffle(m, Lanes{1, 2, 3, 3});
+        v = select(m, __builtin_shuffle(v, Lanes{2, 3, 2, 3}), v);
+        m &= __builtin_shuffle(m, Lanes{2, 3, 2, 3});
+        v = select(m, carry, v);
+        store(row + x, v);
+        carry = __builtin_shuffle(v, Lanes{0, 0, 0, 0});
+    }
 }
 
 }  // namespace stria::pipeline

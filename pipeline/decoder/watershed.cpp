@@ -22,8 +22,8 @@
 // and every arrow leads to a neighbour. Branches on data mispredict (flat
 // pixels and runs of arrows come in runs of every length), so the passes
 // avoid them: a row's flat columns are picked 8 pixels at a time, the
-// minima and the arrows along a row take their labels by mask selects, and
-// only paths leading down are walked.
+// minima take their labels by mask selects, the arrows along a row by a
+// prefix scan of 4 labels per step, and only paths leading down are walked.
 #include "pipeline/decoder/workspace.hpp"
 
 #include "pipeline/decoder/simd.hpp"
@@ -32,7 +32,6 @@
 #include <array>
 #include <bit>
 #include <cstring>
-#include <limits>
 
 namespace stria::pipeline {
 
@@ -43,9 +42,6 @@ std::size_t codeEntries(std::size_t pixels, std::size_t width)
 {
     return (pixels + width + 3) / 4;
 }
-
-constexpr std::uint8_t kPlateauArrow = 4;  // code bit: the arrow was set on a plateau
-constexpr std::int32_t kUnresolved = std::numeric_limits<std::int32_t>::min();
 
 // Bit 7 of byte k is set if pixel k of the 8 is flat (code bit 3: arrows
 // are 0-7) and above level 0 (adding 0x7f to the level's low 7 bits, or its
@@ -106,14 +102,6 @@ inline std::int32_t select(bool condition, std::int32_t a, std::int32_t b)
     return b ^ ((a ^ b) & -static_cast<std::int32_t>(condition));
 }
 
-// Each pixel of a row with an arrow up takes the label above it. The rows
-// do not overlap (restrict): GCC vectorises the selects.
-void copyAlongArrowsUp(const std::uint8_t* __restrict code, const std::int32_t* __restrict above,
-                       std::int32_t* __restrict row, int width)
-{
-    for (int x = 0; x < width; ++x) row[x] = select((code[x] & ~kPlateauArrow) == kDescentUp, above[x], row[x]);
-}
-
 // Root of a provisional label: roots hold ~(first pixel), others a smaller label.
 std::int32_t findRoot(std::int32_t* parent, std::int32_t l)
 {
@@ -135,8 +123,9 @@ std::int32_t findBasin(std::int32_t* parent, std::int32_t b)
 
 std::size_t watershedScratchEntries(int width, int height)
 {
-    // The codes and the wall, then the flat columns of a row (and 8 more).
-    return codeEntries(static_cast<std::size_t>(width) * height, width) + width + 8;
+    // The codes and the wall, then the flat columns of a row (and 8 more),
+    // then 64 labels kUnresolved.
+    return codeEntries(static_cast<std::size_t>(width) * height, width) + width + 8 + 64;
 }
 
 void computeWatershed(DecoderWorkspace& ws)
@@ -144,11 +133,13 @@ void computeWatershed(DecoderWorkspace& ws)
     const int w = ws.width, h = ws.height, n = w * h;
     const std::uint8_t* g = ws.gradient.get();
     std::int32_t* label = ws.labels.get();
-    // Scratch: the codes, a row of 255 (the wall beyond the image border) and
-    // the flat columns of one row.
+    // Scratch: the codes, a row of 255 (the wall beyond the image border),
+    // the flat columns of one row and 64 unresolved labels to compare with.
     auto* code = reinterpret_cast<std::uint8_t*>(ws.scratch.get());
     std::uint8_t* wall = code + n;
     std::int32_t* columns = ws.scratch.get() + codeEntries(n, w);
+    std::int32_t* unresolvedRow = columns + w + 8;
+    std::fill(unresolvedRow, unresolvedRow + 64, kUnresolved);
     std::fill(wall, wall + w, 255);
     const std::array<std::int32_t, 4> step{-w, -1, 1, w};
 
@@ -268,32 +259,24 @@ void computeWatershed(DecoderWorkspace& ws)
     // row from the top (the row above is labelled): a sweep to the right
     // copies the labels along arrows up and left, one to the left those
     // along arrows right (a run of arrows ends at a pixel with an arrow up,
-    // a minimum or an arrow down, never at one against it), without a branch.
-    // What remains leads down: those pixels, picked in the second sweep, walk
-    // to a labelled pixel and label the path on the way back.
+    // a minimum or an arrow down, never at one against it), without a branch
+    // (sweepRow). What remains leads down: those pixels, found 64 at a time
+    // by a compare mask, walk to a labelled pixel and label the path on the
+    // way back.
     for (int y = 0; y < h; ++y) {
         const std::uint8_t* rowCode = code + y * w;
         std::int32_t* row = label + y * w;
-        if (y > 0) copyAlongArrowsUp(rowCode, row - w, row, w);  // no arrow up in row 0
-        std::int32_t previous = kUnresolved;
-#pragma GCC unroll 4
-        for (int x = 0; x < w; ++x)
-            row[x] = previous = select((rowCode[x] & ~kPlateauArrow) == kDescentLeft, previous, row[x]);
-        std::int32_t next = kUnresolved;
-        int count = 0;
-#pragma GCC unroll 4
-        for (int x = w - 1; x >= 0; --x) {
-            const std::int32_t l = select((rowCode[x] & ~kPlateauArrow) == kDescentRight, next, row[x]);
-            row[x] = next = l;
-            columns[count] = x;
-            count += l == kUnresolved;
-        }
-        for (int i = 0; i < count; ++i) {
-            const int p = y * w + columns[i];
-            int q = p;
-            while (label[q] == kUnresolved) q += step[code[q] & 3];
-            const std::int32_t basin = label[q];
-            for (int r = p; r != q; r += step[code[r] & 3]) label[r] = basin;
+        sweepRow(rowCode, y > 0 ? row - w : row, row, w);  // no arrow up in row 0
+        for (int x0 = 0; x0 < w; x0 += 64) {
+            const int count = std::min(64, w - x0);
+            std::uint64_t bits = ~borderMask(row + x0, unresolvedRow, count) & (~0ull >> (64 - count));
+            for (; bits != 0; bits &= bits - 1) {
+                const int p = y * w + x0 + std::countr_zero(bits);
+                int q = p;
+                while (label[q] == kUnresolved) q += step[code[q] & 3];
+                const std::int32_t basin = label[q];
+                for (int r = p; r != q; r += step[code[r] & 3]) label[r] = basin;
+            }
         }
     }
 

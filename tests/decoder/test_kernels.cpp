@@ -330,6 +330,31 @@ TEST(DecoderKernels, DescentRowMatchesReferenceOnRandomRowsOfEveryWidth)
                 << "width " << width << ", levels from " << lowest;
 }
 
+TEST(DecoderKernels, SweepRowMatchesReferenceOnRandomRowsOfEveryWidth)
+{
+    // Every code (arrows 0-3, plateau arrows 4-7, flat 8), mostly arrows left
+    // and right (long runs across the 4-label blocks), some labels unresolved.
+    std::mt19937 rng(23);
+    int differing = 0, rows = 0;
+    for (int width : {1, 2, 3, 4, 5, 7, 8, 9, 15, 16, 17, 33, 64, 781})
+        for (int trial = 0; trial < 20; ++trial) {
+            std::vector<std::uint8_t> code(width);
+            std::vector<std::int32_t> above(width), fast(width), reference(width);
+            for (int x = 0; x < width; ++x) {
+                const unsigned r = rng() % 16;
+                code[x] = static_cast<std::uint8_t>(r < 5 ? kDescentLeft : r < 10 ? kDescentRight : r - 10 + (r == 15) * 2);
+                code[x] |= static_cast<std::uint8_t>(code[x] < kDescentFlat && rng() % 4 == 0 ? kPlateauArrow : 0);
+                above[x] = rng() % 8 == 0 ? kUnresolved : static_cast<std::int32_t>(rng() % 1000);
+                fast[x] = reference[x] = rng() % 8 == 0 ? kUnresolved : static_cast<std::int32_t>(rng() % 1000);
+            }
+            sweepRow(code.data(), above.data(), fast.data(), width);
+            sweepRowReference(code.data(), above.data(), reference.data(), width);
+            differing += fast != reference;
+            ++rows;
+        }
+    EXPECT_EQ(differing, 0) << "of " << rows << " rows";
+}
+
 // computeWatershed on a given gradient image, in a workspace sized as
 // Decoder::create() sizes it.
 struct Basins {
