@@ -6,11 +6,12 @@
 // the smaller label to the larger one (their sum is the border's chord, used
 // for the direction in fig. 5) and the image gradient split into the primary
 // direction (across the stripes) and the secondary one (along them) for eq. 8.
-// Edges are found through a short per-vertex list (degrees are ~6), then laid
-// out as compressed incidence lists for the traversal.
+// Edges are found through a hash table of label pairs, then laid out as
+// compressed incidence lists for the traversal.
 #include "pipeline/decoder/workspace.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 
 namespace stria::pipeline {
@@ -47,8 +48,16 @@ PairGradient pairGradient(const FrameView& frame, int x, int y, bool horizontal,
 
 std::size_t graphScratchEntries(std::size_t regions, std::size_t edges)
 {
-    // A list head per region; the next edge and the larger label per edge.
-    return regions + 2 * edges;
+    // The label pair of each edge (2 entries), and one more for the look-up's
+    // read at the next free index; the traversal reuses the share.
+    return regions + 2 * edges + 2;
+}
+
+std::size_t graphTableEntries(std::size_t regions, std::size_t edges)
+{
+    // At most half full: a power of two >= twice the edges there can be (a
+    // planar graph has fewer than 3 per vertex).
+    return std::bit_ceil(std::max<std::size_t>(2, 2 * std::min(edges, 3 * regions)));
 }
 
 void buildGraph(DecoderWorkspace& ws)
@@ -57,45 +66,59 @@ void buildGraph(DecoderWorkspace& ws)
     const std::int32_t* label = ws.labels.get();
     ws.edgeCount = 0;
 
-    // Per region the list of its edges to larger labels, in compact arrays
-    // in the scratch (the Region and GraphEdge records are 64 and 44 bytes
-    // apart): the walk touches 8 bytes per edge.
-    std::int32_t* head = ws.scratch.get();
-    std::int32_t* next = head + ws.regionCount;
-    std::int32_t* larger = next + ws.maxEdges;
-    std::fill(head, head + ws.regionCount, -1);
-    auto findOrAddEdge = [&](std::int32_t a, std::int32_t b) -> std::int32_t {
-        for (std::int32_t e = head[a]; e >= 0; e = next[e])
-            if (larger[e] == b) return e;
-        if (ws.edgeCount == ws.maxEdges) {
+    // Edges by label pair: a hash table of edge indices (open addressing,
+    // linear probing; in the order buffer, free from the regions stage to the
+    // depth stage) and each edge's pair (in the scratch). At most half full:
+    // a pair finds its edge, or the empty slot of a new one, nearly always at
+    // the first probe, and whether the edge is new (a fifth of the look-ups,
+    // in no pattern a branch predictor learns) is selected, not branched on:
+    // the empty slot takes the next edge index, whose record is cleared
+    // ahead. (A per-region list walk here cost one mispredicted branch per
+    // look-up.)
+    const std::size_t tableSize = graphTableEntries(ws.regionCount, ws.maxEdges);
+    const int shift = 64 - std::countr_zero(tableSize);
+    std::int32_t* table = ws.pixelOrder;
+    std::fill(table, table + tableSize, -1);
+    auto* edgeKey = reinterpret_cast<std::uint64_t*>(ws.scratch.get());
+    // Below maxEdges only for non-planar label graphs (never half full).
+    const std::int32_t capacity = static_cast<std::int32_t>(std::min<std::size_t>(ws.maxEdges, tableSize / 2));
+    constexpr std::int32_t kClearBlock = 64;
+    std::int32_t cleared = 0;
+    auto clearAhead = [&] {
+        const std::int32_t end = std::min(cleared + kClearBlock, capacity);
+        std::fill(ws.edges.get() + cleared, ws.edges.get() + end, GraphEdge{});
+        cleared = end;
+    };
+    clearAhead();
+    auto edgeOf = [&](std::uint32_t a, std::uint32_t b) -> std::int32_t {
+        const std::uint64_t key = std::uint64_t{a} << 32 | b;
+        std::uint64_t slot = key * 0x9e3779b97f4a7c15u >> shift;
+        // Masks, not bools: GCC turns selects on bools into branches here.
+        std::int32_t e, emptyMask;  // -1 where the slot is empty
+        for (;; slot = (slot + 1) & (tableSize - 1)) {
+            const std::int32_t found = table[slot];
+            emptyMask = found >> 31;
+            e = (found & ~emptyMask) | (ws.edgeCount & emptyMask);
+            if (((edgeKey[e] ^ key) & ~static_cast<std::uint64_t>(std::int64_t{emptyMask})) == 0) break;
+        }
+        if (((e ^ capacity) | ~emptyMask) == 0) {  // new, and no room left
             ws.truncated = true;
             return -1;
         }
-        const std::int32_t e = ws.edgeCount++;
-        GraphEdge& edge = ws.edges[e];
-        edge = GraphEdge{};
-        edge.a = a;
-        edge.b = b;
-        larger[e] = b;
-        next[e] = head[a];
-        head[a] = e;
+        table[slot] = e;
+        edgeKey[e] = key;
+        ws.edgeCount -= emptyMask;
+        if (ws.edgeCount == cleared) clearAhead();
         return e;
     };
 
     // Adds border pair p-q (q right of p or below it) to its edge.
-    // Consecutive vertical pairs along a horizontal border share their labels
-    // and edge: the last pair's edge is reused without a list walk.
-    std::int32_t lastP = -1, lastQ = -1, lastEdge = -1;
     auto addPair = [&](std::int32_t lp, std::int32_t lq, bool horizontal, const PairGradient& gradient) {
-        if (lp != lastP || lq != lastQ) {
-            lastP = lp;
-            lastQ = lq;
-            // Without a branch: which side has the smaller label is unpredictable.
-            lastEdge = findOrAddEdge(std::min(lp, lq), std::max(lp, lq));
-        }
-        if (lastEdge < 0) return;
+        // Without a branch: which side has the smaller label is unpredictable.
+        const std::int32_t e = edgeOf(std::min(lp, lq), std::max(lp, lq));
+        if (e < 0) return;
         const int sign = lp < lq ? 1 : -1;  // +1: the normal from a to b points to +x / +y
-        GraphEdge& edge = ws.edges[lastEdge];
+        GraphEdge& edge = ws.edges[e];
         ++edge.borderCount;
         std::int16_t& normal = horizontal ? edge.normalX : edge.normalY;
         if (normal > -32767 && normal < 32767) normal = static_cast<std::int16_t>(normal + sign);
@@ -123,9 +146,11 @@ void buildGraph(DecoderWorkspace& ws)
             });
     }
 
-    // Incidence lists (CSR).
+    // The pairs, then the incidence lists (CSR).
     Region* regions = ws.regions.get();
     for (int e = 0; e < ws.edgeCount; ++e) {
+        ws.edges[e].a = static_cast<std::int32_t>(edgeKey[e] >> 32);
+        ws.edges[e].b = static_cast<std::int32_t>(edgeKey[e] & 0xffffffffu);
         ++regions[ws.edges[e].a].degree;
         ++regions[ws.edges[e].b].degree;
     }

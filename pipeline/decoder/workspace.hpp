@@ -99,15 +99,15 @@ struct DecoderWorkspace {
     // Per pixel.
     std::unique_ptr<std::uint8_t[]> gradient;
     std::unique_ptr<std::int32_t[]> labels;
-    // One buffer, three uses in turn: the watershed's plateau queue and
+    // One buffer, four uses in turn: the watershed's plateau queue and
     // union-find parents, then pixels sorted by label (regions), then the
-    // output points (depth).
+    // graph's hash table of label pairs, then the output points (depth).
     // Points are 24 bytes, so maxPoints = pixels / 6 fits exactly.
     std::unique_ptr<std::byte[]> orderAndPoints;
     std::int32_t* pixelOrder = nullptr;
     ScanPoint* points = nullptr;
-    // Gradient row lanes, watershed descent codes, region sums, graph edge
-    // lists, then the traversal's seed sort keys and links, then the depth
+    // Gradient row lanes, watershed descent codes, region sums, the graph
+    // edges' label pairs, then the traversal's seed sort keys and links, then the depth
     // stage's region stripes.
     std::unique_ptr<std::int32_t[]> scratch;
 
@@ -145,6 +145,9 @@ std::size_t watershedScratchEntries(int width, int height);
 // Region statistics and graph construction: the scratch entries they need.
 std::size_t regionScratchEntries(std::size_t regions);
 std::size_t graphScratchEntries(std::size_t regions, std::size_t edges);
+// The graph's hash table of label pairs, in the order buffer (int32 entries;
+// the buffer holds max(pixels, this)).
+std::size_t graphTableEntries(std::size_t regions, std::size_t edges);
 // The scratch every stage's share fits in (decoder.cpp): the gradient kernel's
 // row lanes, the watershed's codes, the region sums, the graph's edge lists;
 // the traversal's seed keys and link pairs (2 entries per edge) and depth's

@@ -18,6 +18,7 @@
 #include <array>
 #include <cmath>
 #include <deque>
+#include <limits>
 #include <map>
 #include <numeric>
 #include <random>
@@ -83,21 +84,37 @@ TEST(DecoderKernels, GradientRowMatchesReferenceOnSimulatorFrames)
     EXPECT_EQ(gradientRowsDiffering(frame), 0);
 }
 
-// Samples whose fast projected gradient is not bit-equal to the reference.
+// Window samples of projectedGradientWindows unequal to the reference's
+// (-infinity outside the row): batches of 1-40 windows at random positions,
+// some cut by either end of the row, in both channel orders the decoder
+// uses and one it does not (the generic path).
 int projectedGradientsDiffering(const cv::Mat& frame, const cv::Matx33f& m, std::mt19937& rng)
 {
     std::uniform_real_distribution<float> unit(-1, 1);
+    constexpr float kOutside = -std::numeric_limits<float>::infinity();
     int differing = 0;
-    for (const std::array<int, 3> rgbOffset : {std::array<int, 3>{2, 1, 0}, std::array<int, 3>{0, 1, 2}})
-        for (int y = 0; y < frame.rows; ++y)
-            for (int count = 1; count <= 21; ++count) {
-                const int first = static_cast<int>(rng() % static_cast<unsigned>(frame.cols - count));
-                const cv::Vec3f weight(unit(rng), unit(rng), unit(rng));
-                std::array<float, 21> fast, reference;
-                projectedGradients(frame.ptr(y), first, count, rgbOffset, m, weight, fast.data());
-                projectedGradientsReference(frame.ptr(y), first, count, rgbOffset, m, weight, reference.data());
-                for (int k = 0; k < count; ++k) differing += fast[k] != reference[k];
+    for (const std::array<int, 3> rgbOffset :
+         {std::array<int, 3>{2, 1, 0}, std::array<int, 3>{0, 1, 2}, std::array<int, 3>{1, 2, 0}})
+        for (int y = 0; y < frame.rows; ++y) {
+            const int count = 1 + static_cast<int>(rng() % 40);
+            std::vector<std::int32_t> firsts(count);
+            std::vector<cv::Vec3f> weights(count);
+            for (int j = 0; j < count; ++j) {
+                firsts[j] = static_cast<int>(rng() % static_cast<unsigned>(frame.cols + 12)) - 10;
+                weights[j] = cv::Vec3f(unit(rng), unit(rng), unit(rng));
             }
+            std::vector<std::array<float, kWindowSamples + 1>> fast(count);
+            projectedGradientWindows(frame.ptr(y), frame.cols, firsts.data(), weights.data(), count, rgbOffset, m,
+                                     fast.data());
+            for (int j = 0; j < count; ++j)
+                for (int k = 0; k < kWindowSamples; ++k) {
+                    const int i = firsts[j] + k;
+                    float reference = kOutside;
+                    if (i >= 0 && i <= frame.cols - 2)
+                        projectedGradientsReference(frame.ptr(y), i, 1, rgbOffset, m, weights[j], &reference);
+                    differing += fast[j][k] != reference;
+                }
+        }
     return differing;
 }
 
@@ -497,9 +514,9 @@ struct FloodCase {
         ws.maxRegions = maxRegions;
         ws.gradient = std::make_unique<std::uint8_t[]>(n);
         ws.labels = std::make_unique<std::int32_t[]>(n);
-        ws.orderAndPoints = std::make_unique<std::byte[]>(4 * n);
-        ws.pixelOrder = reinterpret_cast<std::int32_t*>(ws.orderAndPoints.get());
         ws.maxEdges = 3 * maxRegions;
+        ws.orderAndPoints = std::make_unique<std::byte[]>(4 * std::max(n, graphTableEntries(maxRegions, ws.maxEdges)));
+        ws.pixelOrder = reinterpret_cast<std::int32_t*>(ws.orderAndPoints.get());
         ws.scratch = std::make_unique<std::int32_t[]>(scratchEntries(image.cols, image.rows, maxRegions, ws.maxEdges));
         ws.regions = std::make_unique<Region[]>(maxRegions);
         ws.edges = std::make_unique<GraphEdge[]>(ws.maxEdges);
