@@ -22,9 +22,7 @@
 #include <algorithm>
 #include <array>
 #include <bit>
-#include <cmath>
 #include <cstdint>
-#include <limits>
 
 namespace stria::pipeline {
 namespace {
@@ -89,59 +87,68 @@ void computePoints(DecoderWorkspace& ws)
     // pattern edge, free after the traversal).
     std::int32_t* rowPoint = ws.candidates.get();
     const int edgeCount = ws.pattern.edgeCount();
-    bool full = false;  // maxPoints reached: the frame is truncated
 
-    for (int y = 0; y < h; ++y) {
-        const std::int32_t* label = labels + static_cast<std::ptrdiff_t>(y) * w;
+    // A row's edges go through each step below together, a batch of up to
+    // kBatch (on the stack) at a time: one loop per step, whose iterations
+    // are independent, so the core overlaps several edges' divisions and
+    // dependency chains; one loop over the whole chain per edge (600
+    // instructions) left its latency exposed.
+    constexpr int kBatch = 256;
+    std::array<std::int32_t, kBatch> at, edges, firsts;
+    std::array<cv::Vec3f, kBatch> weights;
+    std::array<std::array<float, kWindowSamples + 1>, kBatch> samples;
+    std::array<double, kBatch> columns;
+    int count = 0;
+
+    // Steps 2-5 for the batch's edges of row y: false when maxPoints is reached.
+    auto locate = [&](int y, const std::int32_t* label, const RowRays& rays) {
         const std::uint8_t* row = ws.frame.row(y);
-        const RowRays rays(ws, y);
-        std::fill(rowPoint, rowPoint + edgeCount, -1);
-        // Label changes from borderMask's masks, without a branch per
-        // pixel: whether two neighbours share a label is noise to a branch
-        // predictor (it mispredicted 85 000 times per 780x580 frame).
-        forEachBorder(label, label + 1, w - 1, [&](int x) {
-            if (full) return;
-            const int leftStripe = stripes[label[x]], rightStripe = stripes[label[x + 1]];
-            if (leftStripe < 0 || rightStripe < 0 || std::abs(leftStripe - rightStripe) != 1) return;
+        // Weights per channel: expected sign / range, walking left to right.
+        for (int j = 0; j < count; ++j) {
+            const int x = at[j];
             const Region& left = regions[label[x]];
             const Region& right = regions[label[x + 1]];
+            const int leftStripe = stripes[label[x]], rightStripe = stripes[label[x + 1]];
             const int edge = std::min(leftStripe, rightStripe);
-            // Weights per channel: expected sign / range, walking left to right.
             const std::array<std::int8_t, 3>& sign = kSymbolSigns[ws.pattern.edgeSymbol(edge)];
             const float orientation = rightStripe > leftStripe ? 1.0f : -1.0f;
-            cv::Vec3f weight;
             for (int c = 0; c < 3; ++c)
-                weight[c] = orientation * static_cast<float>(sign[c]) / std::max(0.5f * (left.range[c] + right.range[c]), 1.0f);
-            // Projected gradient at half-pixel positions i + 0.5, i in
-            // [x - kReach, x + kReach]: every sample both searches below
-            // can read. Near the image border the samples past it are
-            // -inf, which never wins the peak search, so that search has
-            // fixed bounds (unrolled: 5 selects, not a loop with clamped
-            // bounds; depth 24.0 -> 22.3 M instructions at 780x580). The
-            // last sample is read only by the centroid of a peak at
-            // x + kSearchRadius: it is computed then, so most edges take
-            // 8 samples (two kernel steps of 4) rather than 9 (three).
-            constexpr int kReach = 2 * kSearchRadius;
-            const int lo = std::max(x - kReach, 0), hi = std::min(x + kReach, w - 2);
-            std::array<float, 2 * kReach + 1> samples;
-            const bool lastLater = hi - lo + 1 == static_cast<int>(samples.size());
-            if (!lastLater) samples.fill(-std::numeric_limits<float>::infinity());
-            auto sample = [&](int i) -> float& { return samples[i - x + kReach]; };
-            projectedGradients(row, lo, hi - lo + 1 - lastLater, ws.rgbOffset, m, weight, &sample(lo));
-            int peak = x;
-            float peakValue = sample(x);
-            for (int i = x - kSearchRadius; i <= x + kSearchRadius; ++i) {
-                const float g = sample(i);
-                const bool higher = g > peakValue;  // selects, not a branch: which sample wins is noise
-                peak = higher ? i : peak;
-                peakValue = higher ? g : peakValue;
-            }
+                weights[j][c] = orientation * static_cast<float>(sign[c]) / std::max(0.5f * (left.range[c] + right.range[c]), 1.0f);
+            edges[j] = edge;
+            firsts[j] = x - 2 * kSearchRadius;
+        }
+        // Projected gradient at half-pixel positions i + 0.5, i in
+        // [x - 2 * kSearchRadius, x + 2 * kSearchRadius]: every sample both
+        // searches below can read (-inf past the image border, which never
+        // wins the peak search, so that search has fixed bounds). The last
+        // is read only by the centroid of a peak at x + kSearchRadius: it is
+        // computed then, so most edges take 8 samples (two kernel steps of
+        // 4) rather than 9 (three).
+        projectedGradientWindows(row, w, firsts.data(), weights.data(), count, ws.rgbOffset, m, samples.data());
+        int located = 0;
+        for (int j = 0; j < count; ++j) {
+            const int x = at[j];
+            std::array<float, kWindowSamples + 1>& s = samples[j];
+            // The peak: the strongest sample within kSearchRadius of x,
+            // x's own on a tie, else the first. Maximum and position by
+            // selects, not branches: which sample wins is noise.
+            constexpr int kCentre = 2 * kSearchRadius;  // x's sample
+            float peakValue = s[kCentre - 2];
+            for (int k = kCentre - 1; k <= kCentre + 2; ++k) peakValue = std::max(peakValue, s[k]);
+            // Equal floats by their bits: the same for a peak above 0, the
+            // only one used (a 0 peak may pick another sample), and two
+            // integer compares cheaper than a float one.
+            unsigned best = 0;
+            for (int k = 0; k <= 4; ++k)
+                best |= static_cast<unsigned>(std::bit_cast<std::int32_t>(s[kCentre - 2 + k]) == std::bit_cast<std::int32_t>(peakValue)) << k;
+            best &= ~((best >> 2 & 1) * 3u);  // x's own sample first
+            const int peak = x - kSearchRadius + std::countr_zero(best);
             // The peak must lie inside the search window with its whole
             // centroid window in the image: an edge whose profile the image
             // border cuts off cannot be located.
-            if (!(peakValue > 0) || peak - kSearchRadius < 0 || peak + kSearchRadius > w - 2) return;
-            if (lastLater && peak == x + kSearchRadius)
-                projectedGradients(row, hi, 1, ws.rgbOffset, m, weight, &sample(hi));
+            if (!(peakValue > 0) || peak - kSearchRadius < 0 || peak + kSearchRadius > w - 2) continue;
+            if (peak == x + kSearchRadius)
+                projectedGradientsReference(row, x + 2 * kSearchRadius, 1, ws.rgbOffset, m, weights[j], &s[2 * kCentre]);
             // Centroid of the peak's samples above a quarter of its height:
             // averages the noise over ~3 samples, and the threshold keeps the
             // tails of the neighbouring stripe edges out.
@@ -152,15 +159,20 @@ void computePoints(DecoderWorkspace& ws)
             // branch, mispredicted 33 000 times per 780x580 frame.
             float sum = 0, moment = 0;
             for (int i = peak - kSearchRadius; i <= peak + kSearchRadius; ++i) {
-                const float d = sample(i) - kCentroidThreshold * peakValue;
+                const float d = s[i - x + kCentre] - kCentroidThreshold * peakValue;
                 const float g = std::bit_cast<float>(std::bit_cast<std::uint32_t>(d) & -static_cast<std::uint32_t>(d > 0));
                 sum += g;
                 moment += g * static_cast<float>(i - peak);
             }
             const float offset = moment / sum;
-            const double u = peak + 0.5 + offset;
+            columns[located] = peak + 0.5 + offset;
+            edges[located++] = edges[j];
+        }
+        for (int j = 0; j < located; ++j) {
+            const double u = columns[j];
+            const int edge = edges[j];
             const auto point = RigModel::intersectRay(rays.at(u), ws.lightPlanes[edge]);
-            if (!point) return;
+            if (!point) continue;
             const ScanPoint scanPoint{cv::Vec3f(static_cast<float>((*point)[0]), static_cast<float>((*point)[1]),
                                                 static_cast<float>((*point)[2])),
                                       cv::Point2f(static_cast<float>(u), static_cast<float>(y)), edge};
@@ -168,16 +180,40 @@ void computePoints(DecoderWorkspace& ws)
             // distance from the projector: the smaller z is the lit point.
             if (const int earlier = rowPoint[edge]; earlier >= 0) {
                 if (scanPoint.position[2] < ws.points[earlier].position[2]) ws.points[earlier] = scanPoint;
-                return;
+                continue;
             }
             if (ws.pointCount == ws.maxPoints) {
-                ws.truncated = full = true;
-                return;
+                ws.truncated = true;
+                return false;
             }
             rowPoint[edge] = ws.pointCount;
             ws.points[ws.pointCount++] = scanPoint;
-        });
-        if (full) return;
+        }
+        count = 0;
+        return true;
+    };
+
+    for (int y = 0; y < h; ++y) {
+        const std::int32_t* label = labels + static_cast<std::ptrdiff_t>(y) * w;
+        const RowRays rays(ws, y);
+        std::fill(rowPoint, rowPoint + edgeCount, -1);
+        // Step 1: label changes between regions decoded as consecutive
+        // stripes k, k + 1, from borderMask's masks, gathered without a
+        // branch per change: whether two neighbours share a label, and
+        // whether their stripes are consecutive, is noise to a branch
+        // predictor (85 000 and 22 000 mispredictions per 780x580 frame).
+        for (int x0 = 0; x0 < w - 1; x0 += 64) {
+            for (std::uint64_t bits = borderMask(label + x0, label + x0 + 1, std::min(64, w - 1 - x0)); bits; bits &= bits - 1) {
+                const int x = x0 + std::countr_zero(bits);
+                const int leftStripe = stripes[label[x]], rightStripe = stripes[label[x + 1]];
+                at[count] = x;
+                // Both decoded and leftStripe - rightStripe = -1 or +1.
+                const unsigned step = static_cast<unsigned>(leftStripe - rightStripe + 1);
+                count += static_cast<int>(((leftStripe | rightStripe) >= 0) & ((step & ~2u) == 0));
+            }
+            if (count > kBatch - 64 && !locate(y, label, rays)) return;
+        }
+        if (!locate(y, label, rays)) return;
     }
 }
 

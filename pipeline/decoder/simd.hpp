@@ -51,12 +51,19 @@ void sweepRow(const std::uint8_t* code, const std::int32_t* above, std::int32_t*
 
 // Edge location (depth.cpp): for the count samples i = first, first + 1, ...
 // of a row, the colour change from pixel i to i + 1 (R G B at rgbOffset),
-// crosstalk-corrected by m and projected on weight: weight . (m * change),
-// summed in that order (so the NEON lanes give the same floats).
+// crosstalk-corrected by m and projected on weight: weight . (m * change).
 void projectedGradientsReference(const std::uint8_t* row, int first, int count, const std::array<int, 3>& rgbOffset,
                                  const cv::Matx33f& m, const cv::Vec3f& weight, float* out);
-void projectedGradients(const std::uint8_t* row, int first, int count, const std::array<int, 3>& rgbOffset,
-                        const cv::Matx33f& m, const cv::Vec3f& weight, float* out);
+// The same for count windows of a row at once (the depth stage's edges):
+// window j's kWindowSamples samples from firsts[j], weighted by weights[j],
+// into out[j][0..7] (out[j][8] is the caller's), -infinity for samples
+// outside the row (i < 0 or i > width - 2). Equal to the reference as
+// floats: its products in its order, the sums without its leading 0 +,
+// which can change the sign of a zero sum only.
+inline constexpr int kWindowSamples = 8;
+void projectedGradientWindows(const std::uint8_t* row, int width, const std::int32_t* firsts,
+                              const cv::Vec3f* weights, int count, const std::array<int, 3>& rgbOffset,
+                              const cv::Matx33f& m, std::array<float, kWindowSamples + 1>* out);
 
 // Region colours (regions.cpp): per byte k < 3 of count >= 1 pixels of 4
 // bytes (a frame pixel's 3 and one more), the median of the pixels' byte k:
