@@ -56,14 +56,14 @@ void computeRegions(DecoderWorkspace& ws)
     forEachRun([&](int x, int end, int y, std::int32_t r) {
         const std::int64_t length = end - x;
         counter[r] += static_cast<std::int32_t>(length);
-        sums[2 * r] += (x + end - 1) * length / 2;
+        sums[2 * r] += (x + end - 1) * length;  // twice the x sum (halved once per region)
         sums[2 * r + 1] += y * length;
     });
     std::int32_t offset = 0;
     for (int r = 0; r < count; ++r) {
         regions[r].pixelCount = counter[r];
         const double size = counter[r];
-        regions[r].centroidX = static_cast<float>(static_cast<double>(sums[2 * r]) / size);
+        regions[r].centroidX = static_cast<float>(static_cast<double>(sums[2 * r] / 2) / size);
         regions[r].centroidY = static_cast<float>(static_cast<double>(sums[2 * r + 1]) / size);
         counter[r] = offset;
         offset += regions[r].pixelCount;

@@ -49,6 +49,25 @@ inline std::array<int, 3> countBelow(const std::uint8_t* bytes, int blocks, Byte
     const uint16x4_t sums = vadd_u16(vget_low_u16(pairs), vget_high_u16(pairs));
     return {vget_lane_u16(sums, 0), vget_lane_u16(sums, 1), vget_lane_u16(sums, 2)};
 }
+
+// The whole search in byte lanes, for count <= 255 (a byte position's four
+// pixel counters sum to at most count).
+inline std::array<std::uint8_t, 3> mediansInBytes(const std::uint8_t* bytes, int blocks, Bytes restLanes, int count)
+{
+    const Bytes half = vdupq_n_u8(static_cast<std::uint8_t>(count / 2));
+    Bytes m = vdupq_n_u8(0), bit = vdupq_n_u8(128);
+    for (int pass = 0; pass < 8; ++pass, bit = vshrq_n_u8(bit, 1)) {
+        const Bytes limit = vorrq_u8(m, bit);
+        Bytes counts = vshrq_n_u8(vandq_u8(vcltq_u8(vld1q_u8(bytes + 16 * blocks), limit), restLanes), 7);
+#pragma GCC unroll 2
+        for (int b = 0; b < blocks; ++b) counts = vsubq_u8(counts, vcltq_u8(vld1q_u8(bytes + 16 * b), limit));
+        // Each byte position's sum over the four pixels, in every pixel's lanes.
+        counts = vaddq_u8(counts, vextq_u8(counts, counts, 8));
+        counts = vaddq_u8(counts, vextq_u8(counts, counts, 4));
+        m = vorrq_u8(m, vandq_u8(bit, vcleq_u8(counts, half)));
+    }
+    return {vgetq_lane_u8(m, 0), vgetq_lane_u8(m, 1), vgetq_lane_u8(m, 2)};
+}
 #else
 using Bytes = __m128i;
 inline Bytes loadBytes(const std::uint8_t* p) { return _mm_loadu_si128(reinterpret_cast<const __m128i*>(p)); }
@@ -71,6 +90,30 @@ inline std::array<int, 3> countBelow(const std::uint8_t* bytes, int blocks, Byte
     sums = _mm_add_epi16(sums, _mm_srli_si128(sums, 8));
     return {_mm_extract_epi16(sums, 0), _mm_extract_epi16(sums, 1), _mm_extract_epi16(sums, 2)};
 }
+
+// The whole search in byte lanes, for count <= 255 (a byte position's four
+// pixel counters sum to at most count): no per-pass moves between vector
+// and scalar registers.
+inline std::array<std::uint8_t, 3> mediansInBytes(const std::uint8_t* bytes, int blocks, Bytes restLanes, int count)
+{
+    const __m128i zero = _mm_setzero_si128(), one = _mm_set1_epi8(1);
+    const __m128i half = _mm_set1_epi8(static_cast<char>(count / 2));
+    __m128i m = zero, bit = _mm_set1_epi8(static_cast<char>(128));
+    // bit >> 1 in 16-bit lanes: no bit crosses into the next byte.
+    for (int pass = 0; pass < 8; ++pass, bit = _mm_srli_epi16(bit, 1)) {
+        const __m128i limit = _mm_sub_epi8(_mm_or_si128(m, bit), one);
+        __m128i counts = _mm_sub_epi8(zero, _mm_and_si128(belowMask(bytes + 16 * blocks, limit), restLanes));
+#pragma GCC unroll 2
+        for (int b = 0; b < blocks; ++b) counts = _mm_sub_epi8(counts, belowMask(bytes + 16 * b, limit));
+        // Each byte position's sum over the four pixels, in every pixel's lanes.
+        counts = _mm_add_epi8(counts, _mm_shuffle_epi32(counts, _MM_SHUFFLE(1, 0, 3, 2)));
+        counts = _mm_add_epi8(counts, _mm_shuffle_epi32(counts, _MM_SHUFFLE(2, 3, 0, 1)));
+        // counts <= count / 2 as min(counts, half) == counts.
+        m = _mm_or_si128(m, _mm_and_si128(bit, _mm_cmpeq_epi8(_mm_min_epu8(counts, half), counts)));
+    }
+    const auto v = static_cast<std::uint32_t>(_mm_cvtsi128_si32(m));
+    return {static_cast<std::uint8_t>(v), static_cast<std::uint8_t>(v >> 8), static_cast<std::uint8_t>(v >> 16)};
+}
 #endif
 
 }  // namespace
@@ -79,14 +122,16 @@ inline std::array<int, 3> countBelow(const std::uint8_t* bytes, int blocks, Byte
 std::array<std::uint8_t, 3> channelMedians(const std::uint32_t* pixels, int count)
 {
 #if defined(__ARM_NEON) || defined(__SSE2__)
-    if (const int blocks = count / 4; blocks <= 254) {
-        // The median m = values sorted[count / 2] is the largest t with at
-        // most count / 2 values below t: found bit by bit from the top, each
-        // step one counting pass over the pixels (4 pixels' 3 channels per
-        // compare, no branch per value; a region's ~256 bytes stay in L1
-        // for the 8 passes).
-        const auto* bytes = reinterpret_cast<const std::uint8_t*>(pixels);
-        const Bytes restLanes = loadBytes(kLeadingLanes + 16 - 4 * (count - 4 * blocks));
+    // The median m = values sorted[count / 2] is the largest t with at most
+    // count / 2 values below t: found bit by bit from the top, each step one
+    // counting pass over the pixels (4 pixels' 3 channels per compare, no
+    // branch per value; a region's ~256 bytes stay in L1 for the 8 passes).
+    const int blocks = count / 4;
+    const auto* bytes = reinterpret_cast<const std::uint8_t*>(pixels);
+    const Bytes restLanes = loadBytes(kLeadingLanes + 16 - 4 * (count - 4 * blocks));
+    if (count <= 255) return mediansInBytes(bytes, blocks, restLanes, count);
+    if (blocks <= 254) {
+        // Counts summed in 16 bits.
         std::array<int, 3> m{};
         for (int bit = 128; bit > 0; bit >>= 1) {
             const std::array<int, 3> below = countBelow(bytes, blocks, restLanes, {m[0] | bit, m[1] | bit, m[2] | bit});

@@ -139,7 +139,8 @@ TEST(DecoderKernels, EdgeLocationGradientsEqualReferenceOnSimulatorFrame)
 
 // Region medians whose fast selection differs from the reference: every
 // count up to 70 (around the 4-pixel blocks, and the tail alone) and a few
-// up to 3000 (past the 254 blocks the fast path takes), of random bytes, of
+// up to 3000 (past the 255 pixels the byte-lane search takes and the 254
+// blocks the 16-bit one takes), of random bytes, of
 // few distinct values (ties at the median) and of the extremes 0 and 255.
 int regionMediansDiffering(unsigned seed)
 {
@@ -149,7 +150,7 @@ int regionMediansDiffering(unsigned seed)
     auto compare = [&](int count) {
         differing += channelMedians(pixels.data(), count) != channelMediansReference(pixels.data(), count);
     };
-    for (int count : {1, 2, 3, 4, 5, 63, 64, 65, 1016, 1019, 1020, 3000})
+    for (int count : {1, 2, 3, 4, 5, 63, 64, 65, 252, 255, 256, 257, 1016, 1019, 1020, 3000})
         for (int kind = 0; kind < 3; ++kind) {
             for (int i = 0; i < count; ++i) {
                 const std::uint32_t v = rng();
