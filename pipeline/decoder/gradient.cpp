@@ -14,7 +14,6 @@
 #include <array>
 #include <cmath>
 #include <cstdlib>
-#include <cstring>
 
 namespace stria::pipeline {
 
@@ -23,26 +22,12 @@ void computeGradient(DecoderWorkspace& ws)
     const int w = ws.width, h = ws.height;
     // Along the stripes: image y when the primary direction is closer to x.
     const bool alongY = std::abs(ws.primary[0]) >= std::abs(ws.primary[1]);
-    // Row buffers in memory the watershed fills later: the along-stripe
-    // gradient in the order buffer, the kernel's int16 lanes in the scratch.
-    auto* alongRow = reinterpret_cast<std::uint8_t*>(ws.orderAndPoints.get());
+    // The kernel's int16 lanes in the scratch, which the watershed fills later.
     auto* lanes = reinterpret_cast<std::int16_t*>(ws.scratch.get());
-    // Along-gradient histogram in four interleaved copies (neighbouring
-    // pixels mostly share a value: one counter would serialise the increments).
-    std::array<std::array<int, 256>, 4> alongCounts{};
-    for (int y = 0; y < h; ++y) {
-        std::uint8_t* out = ws.gradient.get() + static_cast<std::ptrdiff_t>(y) * w;
+    AlongCounts alongCounts{};
+    for (int y = 0; y < h; ++y)
         gradientRow(ws.frame.row(std::max(y - 1, 0)), ws.frame.row(y), ws.frame.row(std::min(y + 1, h - 1)), w, alongY,
-                    out, alongRow, lanes);
-        // 8 values per load, pixel x + k into copy k % 4.
-        int x = 0;
-        for (; x + 8 <= w; x += 8) {
-            std::uint64_t values;
-            std::memcpy(&values, alongRow + x, 8);
-            for (int k = 0; k < 8; ++k) ++alongCounts[k & 3][(values >> (8 * k)) & 0xff];
-        }
-        for (; x < w; ++x) ++alongCounts[x & 3][alongRow[x]];
-    }
+                    ws.gradient.get() + static_cast<std::ptrdiff_t>(y) * w, alongCounts, lanes);
     std::array<int, 256> along;
     for (int l = 0; l < 256; ++l) along[l] = alongCounts[0][l] + alongCounts[1][l] + alongCounts[2][l] + alongCounts[3][l];
 

@@ -16,13 +16,16 @@ namespace stria::pipeline {
 
 // One row of the gradient stage (gradient.cpp) from the rows above, at and
 // below it (clamped at the image border by the caller): per pixel,
-// magnitude = (max over channels of Sobel |dx|/4 + |dy|/4, + 1) / 2 and
-// along = max over channels of |dy|/4 (alongY) or |dx|/4.
+// magnitude = (max over channels of Sobel |dx|/4 + |dy|/4, + 1) / 2, and
+// along = max over channels of |dy|/4 (alongY) or |dx|/4 counted in a
+// histogram: pixel x adds 1 to alongCounts[x % 4][along] (neighbouring
+// pixels mostly share a value: one counter would serialise the increments).
+using AlongCounts = std::array<std::array<std::int32_t, 256>, 4>;
 void gradientRowReference(const std::uint8_t* up, const std::uint8_t* row, const std::uint8_t* down, int width,
-                          bool alongY, std::uint8_t* magnitude, std::uint8_t* along);
+                          bool alongY, std::uint8_t* magnitude, AlongCounts& alongCounts);
 // Same output. lanes: 12 x width int16 of scratch (unused with NEON).
 void gradientRow(const std::uint8_t* up, const std::uint8_t* row, const std::uint8_t* down, int width, bool alongY,
-                 std::uint8_t* magnitude, std::uint8_t* along, std::int16_t* lanes);
+                 std::uint8_t* magnitude, AlongCounts& alongCounts, std::int16_t* lanes);
 
 // Watershed by steepest descent (watershed.cpp): per pixel of a row, the
 // direction of its lowest 4-neighbour if that is strictly lower than the

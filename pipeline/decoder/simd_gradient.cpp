@@ -13,7 +13,7 @@ namespace {
 
 // Pixel x with its neighbours' columns clamped to the row.
 inline void gradientPixel(const std::uint8_t* up, const std::uint8_t* row, const std::uint8_t* down, int width,
-                          bool alongY, int x, std::uint8_t* magnitude, std::uint8_t* along)
+                          bool alongY, int x, std::uint8_t* magnitude, AlongCounts& alongCounts)
 {
     const int left = 3 * std::max(x - 1, 0), right = 3 * std::min(x + 1, width - 1), here = 3 * x;
     int best = 0, bestAlong = 0;
@@ -26,15 +26,15 @@ inline void gradientPixel(const std::uint8_t* up, const std::uint8_t* row, const
         best = std::max(best, gx + gy);
         bestAlong = std::max(bestAlong, alongY ? gy : gx);
     }
-    // best <= 510 and bestAlong <= 255: both fit a byte as stored.
+    // best <= 510 and bestAlong <= 255.
     magnitude[x] = static_cast<std::uint8_t>((best + 1) / 2);
-    along[x] = static_cast<std::uint8_t>(bestAlong);
+    ++alongCounts[x & 3][bestAlong];
 }
 
 #if defined(__ARM_NEON)
 // 16 pixels from x: the three channels de-interleaved by vld3.
 inline void gradient16(const std::uint8_t* up, const std::uint8_t* row, const std::uint8_t* down, bool alongY, int x,
-                       std::uint8_t* magnitude, std::uint8_t* along)
+                       std::uint8_t* magnitude, AlongCounts& alongCounts)
 {
     const uint8x16x3_t ul = vld3q_u8(up + 3 * (x - 1)), uh = vld3q_u8(up + 3 * x), ur = vld3q_u8(up + 3 * (x + 1));
     const uint8x16x3_t rl = vld3q_u8(row + 3 * (x - 1)), rr = vld3q_u8(row + 3 * (x + 1));
@@ -67,29 +67,31 @@ inline void gradient16(const std::uint8_t* up, const std::uint8_t* row, const st
     const uint16x8_t one = vdupq_n_u16(1);
     vst1q_u8(magnitude + x, vcombine_u8(vmovn_u16(vshrq_n_u16(vaddq_u16(best[0], one), 1)),
                                         vmovn_u16(vshrq_n_u16(vaddq_u16(best[1], one), 1))));
-    vst1q_u8(along + x, vcombine_u8(vmovn_u16(bestAlong[0]), vmovn_u16(bestAlong[1])));
+    std::uint8_t along[16];
+    vst1q_u8(along, vcombine_u8(vmovn_u16(bestAlong[0]), vmovn_u16(bestAlong[1])));
+    for (int k = 0; k < 16; ++k) ++alongCounts[(x + k) & 3][along[k]];
 }
 #endif
 
 }  // namespace
 
 void gradientRowReference(const std::uint8_t* up, const std::uint8_t* row, const std::uint8_t* down, int width,
-                          bool alongY, std::uint8_t* magnitude, std::uint8_t* along)
+                          bool alongY, std::uint8_t* magnitude, AlongCounts& alongCounts)
 {
-    for (int x = 0; x < width; ++x) gradientPixel(up, row, down, width, alongY, x, magnitude, along);
+    for (int x = 0; x < width; ++x) gradientPixel(up, row, down, width, alongY, x, magnitude, alongCounts);
 }
 
 void gradientRow(const std::uint8_t* up, const std::uint8_t* row, const std::uint8_t* down, int width, bool alongY,
-                 std::uint8_t* magnitude, std::uint8_t* along, [[maybe_unused]] std::int16_t* lanes)
+                 std::uint8_t* magnitude, AlongCounts& alongCounts, [[maybe_unused]] std::int16_t* lanes)
 {
     if (width < 3) {
-        gradientRowReference(up, row, down, width, alongY, magnitude, along);
+        gradientRowReference(up, row, down, width, alongY, magnitude, alongCounts);
         return;
     }
-    gradientPixel(up, row, down, width, alongY, 0, magnitude, along);
+    gradientPixel(up, row, down, width, alongY, 0, magnitude, alongCounts);
     int x = 1;
 #if defined(__ARM_NEON)
-    for (; x + 16 < width; x += 16) gradient16(up, row, down, alongY, x, magnitude, along);
+    for (; x + 16 < width; x += 16) gradient16(up, row, down, alongY, x, magnitude, alongCounts);
 #else
     // Per byte lane i (pixel i / 3, channel i % 3) of the interior pixels,
     // in int16 loops the compiler vectorises: separable Sobel, then per lane
@@ -118,12 +120,20 @@ void gradientRow(const std::uint8_t* up, const std::uint8_t* row, const std::uin
         best[i] = std::max(std::max(sum[i], sum[i + 1]), sum[i + 2]);
         bestAlong[i] = std::max(std::max(alongLane[i], alongLane[i + 1]), alongLane[i + 2]);
     }
+    // The histogram counted here, from the lanes (no along row to store and
+    // load again); 4 pixels per step, x = 1 mod 4, so that each one's copy
+    // is a constant.
+    for (; x + 4 < width; x += 4)
+        for (int k = 0; k < 4; ++k) {
+            magnitude[x + k] = static_cast<std::uint8_t>((best[3 * (x + k)] + 1) >> 1);
+            ++alongCounts[(1 + k) & 3][bestAlong[3 * (x + k)]];
+        }
     for (; x + 1 < width; ++x) {
         magnitude[x] = static_cast<std::uint8_t>((best[3 * x] + 1) >> 1);
-        along[x] = static_cast<std::uint8_t>(bestAlong[3 * x]);
+        ++alongCounts[x & 3][bestAlong[3 * x]];
     }
 #endif
-    for (; x < width; ++x) gradientPixel(up, row, down, width, alongY, x, magnitude, along);
+    for (; x < width; ++x) gradientPixel(up, row, down, width, alongY, x, magnitude, alongCounts);
 }
 
 }  // namespace stria::pipeline
