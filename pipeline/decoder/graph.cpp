@@ -68,14 +68,16 @@ void buildGraph(DecoderWorkspace& ws)
 
     // Edges by label pair: a hash table of edge indices (open addressing,
     // linear probing; in the order buffer, free from the regions stage to the
-    // depth stage) and each edge's pair (in the scratch). At most half full:
-    // a pair finds its edge, or the empty slot of a new one, nearly always at
-    // the first probe, and whether the edge is new (a fifth of the look-ups,
-    // in no pattern a branch predictor learns) is selected, not branched on:
-    // the empty slot takes the next edge index, whose record is cleared
-    // ahead. (A per-region list walk here cost one mispredicted branch per
-    // look-up.)
-    const std::size_t tableSize = graphTableEntries(ws.regionCount, ws.maxEdges);
+    // depth stage) and each edge's pair (in the scratch). At most half full
+    // (graphTableEntries), a quarter where the buffer has room (it has for
+    // the default capacities): a pair finds its edge, or the empty slot of a
+    // new one, nearly always at the first probe, and whether the edge is new
+    // (a fifth of the look-ups, in no pattern a branch predictor learns) is
+    // selected, not branched on: the empty slot takes the next edge index,
+    // whose record is cleared ahead. (A per-region list walk here cost one
+    // mispredicted branch per look-up.)
+    const std::size_t room = std::max(static_cast<std::size_t>(w) * h, graphTableEntries(ws.maxRegions, ws.maxEdges));
+    const std::size_t tableSize = std::min(std::bit_floor(room), 2 * graphTableEntries(ws.regionCount, ws.maxEdges));
     const int shift = 64 - std::countr_zero(tableSize);
     std::int32_t* table = ws.pixelOrder;
     std::fill(table, table + tableSize, -1);
