@@ -64,7 +64,6 @@ void buildGraph(DecoderWorkspace& ws)
 {
     const int w = ws.width, h = ws.height;
     const std::int32_t* label = ws.labels.get();
-    ws.edgeCount = 0;
 
     // Edges by label pair: a hash table of edge indices (open addressing,
     // linear probing; in the order buffer, free from the regions stage to the
@@ -84,11 +83,15 @@ void buildGraph(DecoderWorkspace& ws)
     auto* edgeKey = reinterpret_cast<std::uint64_t*>(ws.scratch.get());
     // Below maxEdges only for non-planar label graphs (never half full).
     const std::int32_t capacity = static_cast<std::int32_t>(std::min<std::size_t>(ws.maxEdges, tableSize / 2));
+    // Locals, not workspace fields, across the kernel calls: kept in
+    // registers (the edge count is in every look-up's dependency chain).
+    GraphEdge* edges = ws.edges.get();
+    std::int32_t edgeCount = 0;
     constexpr std::int32_t kClearBlock = 64;
     std::int32_t cleared = 0;
     auto clearAhead = [&] {
         const std::int32_t end = std::min(cleared + kClearBlock, capacity);
-        std::fill(ws.edges.get() + cleared, ws.edges.get() + end, GraphEdge{});
+        std::fill(edges + cleared, edges + end, GraphEdge{});
         cleared = end;
     };
     clearAhead();
@@ -100,7 +103,7 @@ void buildGraph(DecoderWorkspace& ws)
         for (;; slot = (slot + 1) & (tableSize - 1)) {
             const std::int32_t found = table[slot];
             emptyMask = found >> 31;
-            e = (found & ~emptyMask) | (ws.edgeCount & emptyMask);
+            e = (found & ~emptyMask) | (edgeCount & emptyMask);
             if (((edgeKey[e] ^ key) & ~static_cast<std::uint64_t>(std::int64_t{emptyMask})) == 0) break;
         }
         if (((e ^ capacity) | ~emptyMask) == 0) {  // new, and no room left
@@ -109,8 +112,8 @@ void buildGraph(DecoderWorkspace& ws)
         }
         table[slot] = e;
         edgeKey[e] = key;
-        ws.edgeCount -= emptyMask;
-        if (ws.edgeCount == cleared) clearAhead();
+        edgeCount -= emptyMask;
+        if (edgeCount == cleared) clearAhead();
         return e;
     };
 
@@ -120,7 +123,7 @@ void buildGraph(DecoderWorkspace& ws)
         const std::int32_t e = edgeOf(std::min(lp, lq), std::max(lp, lq));
         if (e < 0) return;
         const int sign = lp < lq ? 1 : -1;  // +1: the normal from a to b points to +x / +y
-        GraphEdge& edge = ws.edges[e];
+        GraphEdge& edge = edges[e];
         ++edge.borderCount;
         std::int16_t& normal = horizontal ? edge.normalX : edge.normalY;
         if (normal > -32767 && normal < 32767) normal = static_cast<std::int16_t>(normal + sign);
@@ -147,6 +150,8 @@ void buildGraph(DecoderWorkspace& ws)
                                            : pairGradient(ws.frame, x, y, false, ws.primary));
             });
     }
+
+    ws.edgeCount = edgeCount;
 
     // The pairs, then the incidence lists (CSR).
     Region* regions = ws.regions.get();
