@@ -94,14 +94,17 @@ void gradientRow(const std::uint8_t* up, const std::uint8_t* row, const std::uin
     for (; x + 16 < width; x += 16) gradient16(up, row, down, alongY, x, magnitude, alongCounts);
 #else
     // Per byte lane i (pixel i / 3, channel i % 3) of the interior pixels,
-    // in int16 loops the compiler vectorises: separable Sobel, then per lane
-    // the maximum over it and the next two (for i = 3x: pixel x's channels);
-    // only the final pick of every third lane is scalar.
+    // in loops the compiler vectorises: separable Sobel in int16 lanes, then
+    // the magnitude halved ((s + 1) / 2 keeps the order, so its maximum is
+    // the halved maximum) and the along gradient, both <= 255, in byte lanes;
+    // per lane the maximum over it and the next two (for i = 3x: pixel x's
+    // channels), 16 lanes per instruction; only the pick of every third
+    // lane is scalar.
     const int bytes = 3 * width;
-    std::int16_t* smooth = lanes;            // up + 2 row + down, then the maximum of |dx| + |dy|
-    std::int16_t* vertical = lanes + bytes;  // down - up, then the maximum along
-    std::int16_t* sum = lanes + 2 * bytes;   // |dx| + |dy|
-    std::int16_t* alongLane = lanes + 3 * bytes;
+    std::int16_t* smooth = lanes;            // up + 2 row + down
+    std::int16_t* vertical = lanes + bytes;  // down - up
+    auto* halfSum = reinterpret_cast<std::uint8_t*>(lanes + 2 * bytes);  // (|dx| + |dy| + 1) / 2
+    std::uint8_t* alongLane = halfSum + bytes;
     for (int i = 0; i < bytes; ++i) {
         smooth[i] = static_cast<std::int16_t>(up[i] + 2 * row[i] + down[i]);
         vertical[i] = static_cast<std::int16_t>(down[i] - up[i]);
@@ -111,13 +114,14 @@ void gradientRow(const std::uint8_t* up, const std::uint8_t* row, const std::uin
         const std::int16_t dy = static_cast<std::int16_t>(vertical[i - 3] + 2 * vertical[i] + vertical[i + 3]);
         const std::int16_t gx = static_cast<std::int16_t>((dx < 0 ? -dx : dx) >> 2);
         const std::int16_t gy = static_cast<std::int16_t>((dy < 0 ? -dy : dy) >> 2);
-        sum[i] = static_cast<std::int16_t>(gx + gy);
-        alongLane[i] = alongY ? gy : gx;
+        halfSum[i] = static_cast<std::uint8_t>((gx + gy + 1) >> 1);
+        alongLane[i] = static_cast<std::uint8_t>(alongY ? gy : gx);
     }
-    std::int16_t* best = smooth;
-    std::int16_t* bestAlong = vertical;
+    // The maxima in the int16 lanes' memory, free by now.
+    auto* best = reinterpret_cast<std::uint8_t*>(lanes);
+    std::uint8_t* bestAlong = best + bytes;
     for (int i = 3; i < bytes - 5; ++i) {
-        best[i] = std::max(std::max(sum[i], sum[i + 1]), sum[i + 2]);
+        best[i] = std::max(std::max(halfSum[i], halfSum[i + 1]), halfSum[i + 2]);
         bestAlong[i] = std::max(std::max(alongLane[i], alongLane[i + 1]), alongLane[i + 2]);
     }
     // The histogram counted here, from the lanes (no along row to store and
@@ -125,11 +129,11 @@ void gradientRow(const std::uint8_t* up, const std::uint8_t* row, const std::uin
     // is a constant.
     for (; x + 4 < width; x += 4)
         for (int k = 0; k < 4; ++k) {
-            magnitude[x + k] = static_cast<std::uint8_t>((best[3 * (x + k)] + 1) >> 1);
+            magnitude[x + k] = best[3 * (x + k)];
             ++alongCounts[(1 + k) & 3][bestAlong[3 * (x + k)]];
         }
     for (; x + 1 < width; ++x) {
-        magnitude[x] = static_cast<std::uint8_t>((best[3 * x] + 1) >> 1);
+        magnitude[x] = best[3 * x];
         ++alongCounts[x & 3][bestAlong[3 * x]];
     }
 #endif
