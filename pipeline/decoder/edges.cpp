@@ -22,7 +22,6 @@
 
 #include <algorithm>
 #include <array>
-#include <bit>
 #include <cmath>
 #include <cstdint>
 
@@ -47,118 +46,116 @@ constexpr float kMaxAlbedoChange = 0.15f;
 
 }  // namespace
 
-EqualizedChange equalizedChange(const DecoderWorkspace& ws, int from, int to)
-{
-    const Region& f = ws.regions[from];
-    const Region& t = ws.regions[to];
-    EqualizedChange out;
-    float norm = 0;
-    for (int c = 0; c < 3; ++c) {
-        const float raw = t.color[c] - f.color[c];
-        out.weight = std::max(out.weight, std::abs(raw));
-        out.c[c] = raw / std::max(0.5f * (f.color[c] + t.color[c]), kMinBrightness);
-        norm = std::max(norm, std::abs(out.c[c]));
-    }
-    out.relative = norm;
-    if (norm > 0)
-        for (float& c : out.c) c /= norm;
-    return out;
-}
-
 namespace {
 
-// `a` where `mask` is all ones, `b` where it is zero. symbolError selects
-// with it rather than branching: the symbol of one call says nothing about
-// the next one's, and with bools from a table GCC emits a branch per
-// channel (callgrind's branch model: 40 000 mispredictions per 780x580
-// decode in the branching form).
-float pick(std::uint32_t mask, float a, float b)
-{
-    return std::bit_cast<float>((std::bit_cast<std::uint32_t>(a) & mask) | (std::bit_cast<std::uint32_t>(b) & ~mask));
-}
+// The three channels and a spare lane, for the per-edge arithmetic of eq. 4-6
+// (GCC vector extensions: SSE2 on x86-64, NEON on aarch64), which the
+// traversal repeats for every symbol it tests. Each lane does the scalar IEEE
+// operation of the per-channel loop it replaces, so the results are the same
+// floats (tests/decoder/test_kernels.cpp compares them with those loops);
+// sums and maxima over the channels stay scalar, in channel order.
+using Lanes = float __attribute__((vector_size(16)));
+using LaneMask = std::int32_t __attribute__((vector_size(16)));
 
-std::uint32_t maskOf(bool condition) { return 0u - static_cast<std::uint32_t>(condition); }
+Lanes lanesOf(const std::array<float, 3>& c) { return Lanes{c[0], c[1], c[2], 0}; }
+Lanes select(LaneMask mask, Lanes a, Lanes b) { return (Lanes)((mask & (LaneMask)a) | (~mask & (LaneMask)b)); }
+Lanes absolute(Lanes v) { return (Lanes)((LaneMask)v & 0x7fffffff); }
+float largestOfChannels(Lanes v) { return std::max({v[0], v[1], v[2]}); }
+// std::min and std::max of two floats as vector selects: GCC compiles the
+// scalar forms to branches, and whether symbolError clamps a common change
+// is data.
+float minOf(float a, float b) { return select(Lanes{b} < Lanes{a}, Lanes{b}, Lanes{a})[0]; }
+float maxOf(float a, float b) { return select(Lanes{a} < Lanes{b}, Lanes{b}, Lanes{a})[0]; }
 
-// Per symbol code, what symbolError needs of its channels, as floats and masks.
+// Per symbol code, what symbolError needs of its channels.
 struct SymbolTerms {
-    std::array<float, 3> sign;  // expected sign per channel
-    std::array<std::uint32_t, 3> falling, constant, rising;  // the channel's group
-    float constantScale;        // 1 / count of the constant channels: 1 or 1/2 (1 if none)
+    Lanes sign;         // expected sign per channel
+    LaneMask constant;  // the channels the symbol keeps constant
+    // Per channel, all ones in the lane of its group: 0 falling, 1 constant, 2 rising.
+    std::array<LaneMask, 3> group;
+    float constantScale;              // 1 / count of the constant channels: 1 or 1/2 (1 if none)
     float fallingScale, risingScale;  // 1 / count of the group: 1 or 1/2 where both exist
-    std::uint32_t viaConstant, viaMidpoint;  // how the common change is estimated
+    // How the common change is estimated: 1 for the way taken, 0 for the
+    // other (multiplying selects without a branch: the symbol of one call
+    // says nothing about the next one's).
+    float viaConstant, viaMidpoint;
 };
 
 constexpr auto kSymbolTerms = [] {
     std::array<SymbolTerms, kSymbolCount> terms{};
     for (int s = 0; s < kSymbolCount; ++s) {
-        SymbolTerms& st = terms[s];
+        const std::array<std::int8_t, 3>& sign = kSymbolSigns[s];
         int count[3] = {0, 0, 0};
+        std::array<LaneMask, 3> group{};
         for (int c = 0; c < 3; ++c) {
-            const int sign = kSymbolSigns[s][c];
-            st.sign[c] = static_cast<float>(sign);
-            st.falling[c] = sign < 0 ? ~0u : 0u;
-            st.constant[c] = sign == 0 ? ~0u : 0u;
-            st.rising[c] = sign > 0 ? ~0u : 0u;
-            ++count[sign + 1];
+            ++count[sign[c] + 1];
+            group[c] = LaneMask{sign[c] < 0 ? -1 : 0, sign[c] == 0 ? -1 : 0, sign[c] > 0 ? -1 : 0, 0};
         }
-        st.constantScale = count[1] == 2 ? 0.5f : 1.0f;
-        st.fallingScale = count[0] == 2 ? 0.5f : 1.0f;
-        st.risingScale = count[2] == 2 ? 0.5f : 1.0f;
-        st.viaConstant = count[1] > 0 ? ~0u : 0u;
-        st.viaMidpoint = count[1] == 0 && count[0] > 0 && count[2] > 0 ? ~0u : 0u;
+        terms[s] = {Lanes{static_cast<float>(sign[0]), static_cast<float>(sign[1]), static_cast<float>(sign[2]), 0},
+                    LaneMask{sign[0] == 0 ? -1 : 0, sign[1] == 0 ? -1 : 0, sign[2] == 0 ? -1 : 0, 0},
+                    group,
+                    count[1] == 2 ? 0.5f : 1.0f,
+                    count[0] == 2 ? 0.5f : 1.0f,
+                    count[2] == 2 ? 0.5f : 1.0f,
+                    count[1] > 0 ? 1.0f : 0.0f,
+                    count[1] == 0 && count[0] > 0 && count[2] > 0 ? 1.0f : 0.0f};
     }
     return terms;
 }();
 
-// matchError with the scales 1 / (1 - t) and 1 / t given.
-float scaledMatchError(const std::array<float, 3>& c, const SymbolTerms& terms, float onScale, float offScale)
+// Eq. 5-6 with the scales 1 / (1 - t) and 1 / t given.
+float scaledMatchError(Lanes c, const SymbolTerms& terms, float onScale, float offScale)
 {
-    float sum = 0;
-    for (int ch = 0; ch < 3; ++ch) {
-        const float e = pick(terms.constant[ch], std::abs(c[ch]) * offScale, (1 - terms.sign[ch] * c[ch]) * onScale);
-        sum += e * e;
-    }
-    return std::sqrt(sum);
+    const Lanes e = select(terms.constant, absolute(c) * offScale, (1 - terms.sign * c) * onScale);
+    const Lanes square = e * e;
+    return std::sqrt(square[0] + square[1] + square[2]);
 }
 
 }  // namespace
 
+EqualizedChange equalizedChange(const DecoderWorkspace& ws, int from, int to)
+{
+    const Lanes f = lanesOf(ws.regions[from].color), t = lanesOf(ws.regions[to].color);
+    const Lanes raw = t - f;
+    const Lanes half = 0.5f * (f + t);
+    Lanes c = raw / select(half < kMinBrightness, Lanes{} + kMinBrightness, half);
+    const float norm = largestOfChannels(absolute(c));
+    if (norm > 0) c /= norm;
+    return {{c[0], c[1], c[2]}, largestOfChannels(absolute(raw)), norm};
+}
+
 float matchError(const std::array<float, 3>& c, SymbolCode symbol, float t)
 {
-    return scaledMatchError(c, kSymbolTerms[symbol], 1 / (1 - t), 1 / t);
+    return scaledMatchError(lanesOf(c), kSymbolTerms[symbol], 1 / (1 - t), 1 / t);
 }
 
 float symbolError(const EqualizedChange& change, SymbolCode symbol, float t)
 {
-    const std::array<float, 3>& c = change.c;
+    const Lanes c = lanesOf(change.c);
     const SymbolTerms& terms = kSymbolTerms[symbol];
     // The common change, estimated from the channels the symbol keeps
     // constant, else as the midpoint of the rising and the falling ones; a
     // symbol that moves every channel the same way leaves none to estimate.
-    // The sums add +0 for the channels outside a group, which leaves them
-    // unchanged; a count of 2 halves exactly, so it multiplies (a count of
-    // 3 is the null symbol, which no stripe edge has).
-    float falling = 0, constant = 0, rising = 0;
-    for (int ch = 0; ch < 3; ++ch) {
-        falling += pick(terms.falling[ch], c[ch], 0.0f);
-        constant += pick(terms.constant[ch], c[ch], 0.0f);
-        rising += pick(terms.rising[ch], c[ch], 0.0f);
-    }
+    // The group sums (one lane each) add +0 for the channels outside the
+    // group, which leaves them unchanged; a count of 2 halves exactly, so it
+    // multiplies (a count of 3 is the null symbol, which no stripe edge has).
+    Lanes groups{};
+    for (int ch = 0; ch < 3; ++ch) groups += select(terms.group[ch], Lanes{} + c[ch], Lanes{});
+    const float falling = groups[0], constant = groups[1], rising = groups[2];
     const float viaMidpoint = 0.5f * (falling * terms.fallingScale + rising * terms.risingScale);
     const float viaConstant = symbol == kNullSymbol ? constant / 3 : constant * terms.constantScale;
-    float common = pick(terms.viaConstant, viaConstant, pick(terms.viaMidpoint, viaMidpoint, 0.0f));
-    // Held within +-bound (std::min and std::clamp's order of comparisons).
-    const float share = kMaxAlbedoChange / change.relative;
-    const float bound = pick(maskOf(change.relative > 0), pick(maskOf(share < kMaxCommonShare), share, kMaxCommonShare), 0.0f);
-    common = pick(maskOf(common < -bound), -bound, pick(maskOf(bound < common), bound, common));
+    // x * 1 + y * 0 is x (up to the sign of a zero, which nothing below tells apart).
+    float common = viaConstant * terms.viaConstant + viaMidpoint * terms.viaMidpoint;
+    // Held within +-bound: std::clamp(common, -bound, bound) (bound >= 0).
+    const float bound = change.relative > 0 ? minOf(kMaxCommonShare, kMaxAlbedoChange / change.relative) : 0.0f;
+    common = maxOf(minOf(common, bound), -bound);
     // Without a common change c is matched as it is (subtracting a zero and
     // dividing by 1 leave it so, up to the sign of zeros, which the match
     // ignores); else the corrected change is normalised again.
-    std::array<float, 3> corrected{c[0] - common, c[1] - common, c[2] - common};
-    const float norm = std::max({std::abs(corrected[0]), std::abs(corrected[1]), std::abs(corrected[2])});
-    const float divisor = pick(maskOf(common != 0) & maskOf(norm > 0), norm, 1.0f);
-    for (float& v : corrected) v /= divisor;
-    return scaledMatchError(corrected, terms, 1 / (1 - t), 1 / t);
+    const Lanes corrected = c - common;
+    const float norm = largestOfChannels(absolute(corrected));
+    const float divisor = common != 0 && norm > 0 ? norm : 1.0f;
+    return scaledMatchError(corrected / divisor, terms, 1 / (1 - t), 1 / t);
 }
 
 SymbolCode optimalSymbol(const std::array<float, 3>& c, float t)

@@ -16,7 +16,9 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
+#include <cstring>
 #include <deque>
 #include <limits>
 #include <map>
@@ -50,17 +52,15 @@ cv::Mat randomFrame(int width, int height, unsigned seed)
 int gradientRowsDiffering(const cv::Mat& frame)
 {
     const int w = frame.cols, h = frame.rows;
-    std::vector<std::uint8_t> magnitude(w), refMagnitude(w);
+    std::vector<std::uint8_t> magnitude(w), along(w), refMagnitude(w), refAlong(w);
     std::vector<std::int16_t> lanes(12 * static_cast<std::size_t>(w));
     int differing = 0;
     for (bool alongY : {false, true})
         for (int y = 0; y < h; ++y) {
             const std::uint8_t* up = frame.ptr(std::max(y - 1, 0));
             const std::uint8_t* down = frame.ptr(std::min(y + 1, h - 1));
-            // Each row's histogram alone, so that a difference counts once.
-            AlongCounts along{}, refAlong{};
-            gradientRow(up, frame.ptr(y), down, w, alongY, magnitude.data(), along, lanes.data());
-            gradientRowReference(up, frame.ptr(y), down, w, alongY, refMagnitude.data(), refAlong);
+            gradientRow(up, frame.ptr(y), down, w, alongY, magnitude.data(), along.data(), lanes.data());
+            gradientRowReference(up, frame.ptr(y), down, w, alongY, refMagnitude.data(), refAlong.data());
             differing += magnitude != refMagnitude || along != refAlong;
         }
     return differing;
@@ -633,6 +633,95 @@ TEST(DecoderKernels, RegionsAndGraphMatchReferencesOnTinyImages)
         EXPECT_EQ(c.differingRegions(), 0) << width << "x" << height;
         EXPECT_EQ(c.differingGraphEdges(), 0) << width << "x" << height;
     }
+}
+
+// The per-channel loops edges.cpp's symbolError, matchError and
+// equalizedChange replaced with vector lanes and selects (before issue #7,
+// round 5); the lanes must give the same floats.
+EqualizedChange referenceEqualizedChange(const Region& f, const Region& t)
+{
+    EqualizedChange out;
+    float norm = 0;
+    for (int c = 0; c < 3; ++c) {
+        const float raw = t.color[c] - f.color[c];
+        out.weight = std::max(out.weight, std::abs(raw));
+        out.c[c] = raw / std::max(0.5f * (f.color[c] + t.color[c]), 20.0f);
+        norm = std::max(norm, std::abs(out.c[c]));
+    }
+    out.relative = norm;
+    if (norm > 0)
+        for (float& c : out.c) c /= norm;
+    return out;
+}
+
+float referenceMatchError(const std::array<float, 3>& c, SymbolCode symbol, float t)
+{
+    const float onScale = 1 / (1 - t), offScale = 1 / t;
+    float sum = 0;
+    for (int ch = 0; ch < 3; ++ch) {
+        const int sign = symbolChannel(symbol, ch);
+        const float e = sign == 0 ? std::abs(c[ch]) * offScale : (1 - sign * c[ch]) * onScale;
+        sum += e * e;
+    }
+    return std::sqrt(sum);
+}
+
+float referenceSymbolError(const EqualizedChange& change, SymbolCode symbol, float t)
+{
+    const std::array<float, 3>& c = change.c;
+    float sum[3] = {0, 0, 0};
+    int count[3] = {0, 0, 0};
+    for (int ch = 0; ch < 3; ++ch) {
+        sum[symbolChannel(symbol, ch) + 1] += c[ch];
+        ++count[symbolChannel(symbol, ch) + 1];
+    }
+    float common = 0;
+    if (count[1] > 0) common = sum[1] / static_cast<float>(count[1]);
+    else if (count[0] > 0 && count[2] > 0)
+        common = 0.5f * (sum[0] / static_cast<float>(count[0]) + sum[2] / static_cast<float>(count[2]));
+    const float bound = change.relative > 0 ? std::min(0.3f, 0.15f / change.relative) : 0.0f;
+    common = std::clamp(common, -bound, bound);
+    if (common == 0) return referenceMatchError(c, symbol, t);
+    std::array<float, 3> corrected{c[0] - common, c[1] - common, c[2] - common};
+    const float norm = std::max({std::abs(corrected[0]), std::abs(corrected[1]), std::abs(corrected[2])});
+    if (norm > 0)
+        for (float& v : corrected) v /= norm;
+    return referenceMatchError(corrected, symbol, t);
+}
+
+TEST(DecoderKernels, EdgeSymbolErrorsMatchThePerChannelLoopsBitwise)
+{
+    // Region colours as the regions stage leaves them (medians after a
+    // crosstalk correction: any float in and somewhat beyond [0, 255],
+    // dark ones below the brightness floor), whole digits (equal channels,
+    // zero changes) among them; every symbol on every change.
+    DecoderWorkspace ws(StripePattern::generate(40, 4, 8, 7).value(), DecoderParams{});
+    ws.regions = std::make_unique<Region[]>(2);
+    std::mt19937 random(7);
+    std::uniform_real_distribution<float> colour(-10.0f, 270.0f);
+    std::uniform_int_distribution<int> digit(0, 3);
+    const float t = static_cast<float>(ws.params.t);
+    int changes = 0, differing = 0, corrected = 0;
+    for (int i = 0; i < 20000; ++i) {
+        for (int r = 0; r < 2; ++r)
+            for (float& c : ws.regions[r].color) c = i % 3 == 0 ? static_cast<float>(64 * digit(random)) : colour(random);
+        const EqualizedChange change = equalizedChange(ws, 0, 1);
+        const EqualizedChange reference = referenceEqualizedChange(ws.regions[0], ws.regions[1]);
+        differing += std::memcmp(&change, &reference, sizeof change) != 0;
+        for (int s = 0; s < kSymbolCount; ++s) {
+            const auto symbol = static_cast<SymbolCode>(s);
+            const float error = symbolError(reference, symbol, t);
+            differing += std::bit_cast<std::uint32_t>(error) !=
+                         std::bit_cast<std::uint32_t>(referenceSymbolError(reference, symbol, t));
+            differing += std::bit_cast<std::uint32_t>(matchError(reference.c, symbol, t)) !=
+                         std::bit_cast<std::uint32_t>(referenceMatchError(reference.c, symbol, t));
+            corrected += error != matchError(reference.c, symbol, t);
+        }
+        ++changes;
+    }
+    EXPECT_EQ(differing, 0) << "of " << changes << " changes";
+    // The common change's correction is exercised, not bypassed.
+    EXPECT_GT(corrected, changes);
 }
 
 }  // namespace
