@@ -23,8 +23,8 @@ namespace stria::pipeline {
 
 std::size_t regionScratchEntries(std::size_t regions)
 {
-    // Coordinate sums (2 x int64) and a counter (int32) per region.
-    return 5 * regions;
+    // Coordinate sums (2 x int64), a counter and an end (int32) per region.
+    return 6 * regions;
 }
 
 void computeRegions(DecoderWorkspace& ws)
@@ -35,10 +35,12 @@ void computeRegions(DecoderWorkspace& ws)
     for (int r = 0; r < count; ++r) regions[r] = Region{};
     // Compact per-region arrays in the scratch (the Region records are 64
     // bytes apart): coordinate sums, then a counter, first of pixels and
-    // then the position of the region's next pixel.
+    // then the position of the region's next pixel, and the end of the
+    // region's positions.
     auto* sums = reinterpret_cast<std::int64_t*>(ws.scratch.get());  // x, y per region
     auto* counter = reinterpret_cast<std::int32_t*>(sums + 2 * static_cast<std::ptrdiff_t>(count));
     std::fill(sums, sums + 2 * static_cast<std::ptrdiff_t>(count), 0);
+    std::int32_t* regionEnd = counter + count;
     std::fill(counter, counter + count, 0);
 
     // Calls run(x, end, y, r) for each run [x, end) of label r in row y.
@@ -67,15 +69,30 @@ void computeRegions(DecoderWorkspace& ws)
         regions[r].centroidY = static_cast<float>(static_cast<double>(sums[2 * r + 1]) / size);
         counter[r] = offset;
         offset += regions[r].pixelCount;
+        regionEnd[r] = offset;
     }
 
     // A pixel's 3 bytes and the next one in 4 bytes (the frame's last pixel
     // has no next byte: 3 copied).
     auto* sorted = reinterpret_cast<std::uint32_t*>(ws.pixelOrder);
+    const int blockRows = w >= 4 ? h - 1 : 0;  // rows whose next row has 10 bytes
     forEachRun([&](int x, int end, int y, std::int32_t r) {
         const std::uint8_t* pixel = ws.frame.row(y) + 3 * x;
         std::uint32_t* out = sorted + counter[r];
         counter[r] += end - x;
+        if (y < blockRows && counter[r] + (3 & (x - end)) <= regionEnd[r]) {
+            // Whole blocks of 4 (a quarter of the loop exits to mispredict):
+            // up to 3 pixels past the run land in the region's own later
+            // positions, which its later runs overwrite, and are read from
+            // at most 10 bytes past the row's end (inside the next row).
+            for (int i = x; i < end; i += 4, pixel += 12, out += 4) {
+                std::memcpy(out, pixel, 4);
+                std::memcpy(out + 1, pixel + 3, 4);
+                std::memcpy(out + 2, pixel + 6, 4);
+                std::memcpy(out + 3, pixel + 9, 4);
+            }
+            return;
+        }
         const int whole = y + 1 == h && end == w ? end - 1 : end;
 #pragma GCC unroll 4
         for (int i = x; i < whole; ++i, pixel += 3) std::memcpy(out++, pixel, 4);
