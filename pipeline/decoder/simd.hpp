@@ -51,6 +51,9 @@ inline constexpr std::int32_t kUnresolved = std::numeric_limits<std::int32_t>::m
 // vector extensions: SSE2 on x86-64, NEON on ARM).
 void sweepRowReference(const std::uint8_t* code, const std::int32_t* above, std::int32_t* row, int width);
 void sweepRow(const std::uint8_t* code, const std::int32_t* above, std::int32_t* row, int width);
+// The first two of these sweeps (arrows up, then left) only.
+void sweepRowUpLeftReference(const std::uint8_t* code, const std::int32_t* above, std::int32_t* row, int width);
+void sweepRowUpLeft(const std::uint8_t* code, const std::int32_t* above, std::int32_t* row, int width);
 
 // Edge location (depth.cpp): for the count samples i = first, first + 1, ...
 // of a row, the colour change from pixel i to i + 1 (R G B at rgbOffset),

@@ -120,17 +120,22 @@ inline Lanes arrowsIn(Lanes codes, std::uint8_t direction)
 
 }  // namespace
 
-void sweepRowReference(const std::uint8_t* code, const std::int32_t* above, std::int32_t* row, int width)
+void sweepRowUpLeftReference(const std::uint8_t* code, const std::int32_t* above, std::int32_t* row, int width)
 {
     for (int x = 0; x < width; ++x)
         if ((code[x] & kArrowBits) == kDescentUp) row[x] = above[x];
     for (int x = 0; x < width; ++x)
         if ((code[x] & kArrowBits) == kDescentLeft) row[x] = x > 0 ? row[x - 1] : kUnresolved;
+}
+
+void sweepRowReference(const std::uint8_t* code, const std::int32_t* above, std::int32_t* row, int width)
+{
+    sweepRowUpLeftReference(code, above, row, width);
     for (int x = width - 1; x >= 0; --x)
         if ((code[x] & kArrowBits) == kDescentRight) row[x] = x + 1 < width ? row[x + 1] : kUnresolved;
 }
 
-void sweepRow(const std::uint8_t* code, const std::int32_t* above, std::int32_t* row, int width)
+void sweepRowUpLeft(const std::uint8_t* code, const std::int32_t* above, std::int32_t* row, int width)
 {
     // A pixel copying its neighbour's label after the neighbour's own copy is
     // a serial chain: as selects per pixel, 3 dependent instructions each.
@@ -159,13 +164,19 @@ void sweepRow(const std::uint8_t* code, const std::int32_t* above, std::int32_t*
         if ((code[x] & kArrowBits) == kDescentLeft) row[x] = previous;
         previous = row[x];
     }
+}
+
+void sweepRow(const std::uint8_t* code, const std::int32_t* above, std::int32_t* row, int width)
+{
+    sweepRowUpLeft(code, above, row, width);
+    const int blocks = width & ~3;
     // The same from the right (the tail first), lanes mirrored.
     std::int32_t next = kUnresolved;
     for (int x = width - 1; x >= blocks; --x) {
         if ((code[x] & kArrowBits) == kDescentRight) row[x] = next;
         next = row[x];
     }
-    carry = Lanes{next, next, next, next};
+    Lanes carry{next, next, next, next};
     for (int x = blocks - 4; x >= 0; x -= 4) {
         Lanes v = load(row + x);
         Lanes m = arrowsIn(codesOf(code + x), kDescentRight);

@@ -22,8 +22,9 @@
 // and every arrow leads to a neighbour. Branches on data mispredict (flat
 // pixels and runs of arrows come in runs of every length), so the passes
 // avoid them: a row's flat columns are picked 8 pixels at a time, the
-// minima take their labels by mask selects, the arrows along a row by a
-// prefix scan of 4 labels per step, and only paths leading down are walked.
+// minima take their labels and the arrows along a row theirs by a prefix
+// scan of 4 labels per step (sweepRowUpLeft, sweepRow), unions and new
+// minima come from bit masks, and only paths leading down are walked.
 #include "pipeline/decoder/workspace.hpp"
 
 #include "pipeline/decoder/simd.hpp"
@@ -95,13 +96,6 @@ int flatColumns(const std::uint8_t* code, int width, std::int32_t* __restrict co
     return count;
 }
 
-// a where the condition holds, else b, by a mask: GCC turns a ternary on
-// data into a branch (or a conditional store) in the loops below.
-inline std::int32_t select(bool condition, std::int32_t a, std::int32_t b)
-{
-    return b ^ ((a ^ b) & -static_cast<std::int32_t>(condition));
-}
-
 // Root of a provisional label: roots hold ~(first pixel), others a smaller label.
 std::int32_t findRoot(std::int32_t* parent, std::int32_t l)
 {
@@ -134,7 +128,8 @@ void computeWatershed(DecoderWorkspace& ws)
     const std::uint8_t* g = ws.gradient.get();
     std::int32_t* label = ws.labels.get();
     // Scratch: the codes, a row of 255 (the wall beyond the image border),
-    // the flat columns of one row and 64 unresolved labels to compare with.
+    // the flat columns of one row (or its minima's codes, bytes) and 64
+    // unresolved labels to compare with.
     auto* code = reinterpret_cast<std::uint8_t*>(ws.scratch.get());
     std::uint8_t* wall = code + n;
     std::int32_t* columns = ws.scratch.get() + codeEntries(n, w);
@@ -190,41 +185,78 @@ void computeWatershed(DecoderWorkspace& ws)
 
     // 3. The flat pixels left are regional minima: connected components by
     // union-find over provisional labels in raster order (adjacent flat
-    // pixels are on one level); every other pixel is unresolved.
+    // pixels are on one level); every other pixel is unresolved. Row by row
+    // without a branch per pixel (flat runs are short: branches on their
+    // ends mispredict): each flat pixel gets a code for the row sweep, an
+    // arrow left if its left neighbour is flat, else up if the upper one is
+    // (plus kPlateauArrow, which the sweep ignores, where both are: the
+    // candidates for a union), else none; those without start a minimum
+    // (a provisional label, in raster order); sweepRowUpLeft copies the
+    // labels; where the left and upper labels then differ, their minima join.
     std::fill(label, label + n, kUnresolved);
     std::int32_t* parent = ws.pixelOrder;
+    auto* minimumCode = reinterpret_cast<std::uint8_t*>(columns);
     int provisional = 0, minima = 0;
+    // Bit k set if byte k of the 8 at p has bit `bit` set.
+    auto bitsOf = [](const std::uint8_t* p, int bit) {
+        static_assert(std::endian::native == std::endian::little, "byte k of the word is pixel k");
+        std::uint64_t c;
+        std::memcpy(&c, p, 8);
+        return static_cast<unsigned>((((c >> bit) & 0x0101010101010101ull) * 0x0102040810204080ull) >> 56);
+    };
+    // The codes by byte masks, which the compiler vectorises (ternaries
+    // became branches).
+    auto mask = [](bool condition) { return static_cast<std::uint8_t>(-static_cast<int>(condition)); };
     for (int y = 0; y < h; ++y) {
-        const int count = flatColumns(code + y * w, w, columns);
+        const std::uint8_t* rowCode = code + y * w;
         std::int32_t* row = label + y * w;
         // Row 0: the wall above (never flat); the labels read there unused.
-        const std::uint8_t* codeAbove = y > 0 ? code + (y - 1) * w : wall;
+        const std::uint8_t* codeAbove = y > 0 ? rowCode - w : wall;
         const std::int32_t* labelAbove = y > 0 ? row - w : row;
-        // Without a branch but for two differently labelled neighbours (the
-        // runs are short: branches on their ends mispredict): the left
-        // neighbour's label, else the upper one's, else a new label (its
-        // parent entry written anyway and kept only then).
-        int previousX = -2;
-        for (int i = 0; i < count; ++i) {
-            const int x = columns[i];
-            const bool left = previousX + 1 == x, up = codeAbove[x] == kDescentFlat;
-            previousX = x;
-            const std::int32_t fromLeft = row[x - left], fromUp = labelAbove[x];
-            const bool fresh = !left & !up;
-            parent[provisional] = ~(y * w + x);
-            std::int32_t l = select(left, fromLeft, select(up, fromUp, ~provisional));
-            provisional += fresh;
-            minima += fresh;
-            // One branch, not three: non-zero if both neighbours are flat and differ.
-            if ((-static_cast<std::int32_t>(left) & -static_cast<std::int32_t>(up) & (fromLeft ^ fromUp)) != 0) {
-                const std::int32_t a = findRoot(parent, ~fromLeft), b = findRoot(parent, ~fromUp);
+        minimumCode[0] = rowCode[0] == kDescentFlat && codeAbove[0] == kDescentFlat ? kDescentUp : kDescentFlat;
+        for (int x = 1; x < w; ++x) {
+            const std::uint8_t flat = mask(rowCode[x] == kDescentFlat), up = mask(codeAbove[x] == kDescentFlat),
+                               left = mask(rowCode[x - 1] == kDescentFlat);
+            const std::uint8_t continued = (left & (kDescentLeft | (up & kPlateauArrow))) | (~left & ~up & kDescentFlat);
+            minimumCode[x] = (flat & continued) | (~flat & kDescentFlat);
+        }
+        // New minima, 64 pixels at a time as bits: flat, without a code (the
+        // codes are at most kDescentFlat: bit 3 is set only there).
+        for (int x0 = 0; x0 < w; x0 += 64) {
+            const int span = std::min(64, w - x0);
+            std::uint64_t fresh = 0;
+            int x = x0;
+            for (; x + 8 <= x0 + span; x += 8)
+                fresh |= std::uint64_t{bitsOf(rowCode + x, 3) & bitsOf(minimumCode + x, 3)} << (x - x0);
+            for (; x < x0 + span; ++x)
+                fresh |= std::uint64_t{rowCode[x] == kDescentFlat && minimumCode[x] == kDescentFlat} << (x - x0);
+            for (; fresh != 0; fresh &= fresh - 1) {
+                const int p = y * w + x0 + std::countr_zero(fresh);
+                parent[provisional] = ~p;
+                label[p] = ~provisional++;
+                ++minima;
+            }
+        }
+        sweepRowUpLeft(minimumCode, labelAbove, row, w);
+        // Unions where a candidate's labels differ (the candidates' codes are
+        // the only ones with bits 0 and 2).
+        for (int x0 = 0; x0 < w; x0 += 64) {
+            const int span = std::min(64, w - x0);
+            std::uint64_t candidates = 0;
+            int x = x0;
+            for (; x + 8 <= x0 + span; x += 8)
+                candidates |= std::uint64_t{bitsOf(minimumCode + x, 0) & bitsOf(minimumCode + x, 2)} << (x - x0);
+            for (; x < x0 + span; ++x)
+                candidates |= std::uint64_t{minimumCode[x] == (kDescentLeft | kPlateauArrow)} << (x - x0);
+            for (candidates &= borderMask(row + x0, labelAbove + x0, span); candidates != 0;
+                 candidates &= candidates - 1) {
+                const int x1 = x0 + std::countr_zero(candidates);
+                const std::int32_t a = findRoot(parent, ~row[x1]), b = findRoot(parent, ~labelAbove[x1]);
                 if (a != b) {
                     parent[std::max(a, b)] = std::min(a, b);
                     --minima;
                 }
-                l = ~std::min(a, b);
             }
-            row[x] = l;
         }
     }
 

@@ -52,15 +52,17 @@ cv::Mat randomFrame(int width, int height, unsigned seed)
 int gradientRowsDiffering(const cv::Mat& frame)
 {
     const int w = frame.cols, h = frame.rows;
-    std::vector<std::uint8_t> magnitude(w), along(w), refMagnitude(w), refAlong(w);
+    std::vector<std::uint8_t> magnitude(w), refMagnitude(w);
     std::vector<std::int16_t> lanes(12 * static_cast<std::size_t>(w));
     int differing = 0;
     for (bool alongY : {false, true})
         for (int y = 0; y < h; ++y) {
             const std::uint8_t* up = frame.ptr(std::max(y - 1, 0));
             const std::uint8_t* down = frame.ptr(std::min(y + 1, h - 1));
-            gradientRow(up, frame.ptr(y), down, w, alongY, magnitude.data(), along.data(), lanes.data());
-            gradientRowReference(up, frame.ptr(y), down, w, alongY, refMagnitude.data(), refAlong.data());
+            // Each row's histogram alone, so that a difference counts once.
+            AlongCounts along{}, refAlong{};
+            gradientRow(up, frame.ptr(y), down, w, alongY, magnitude.data(), along, lanes.data());
+            gradientRowReference(up, frame.ptr(y), down, w, alongY, refMagnitude.data(), refAlong);
             differing += magnitude != refMagnitude || along != refAlong;
         }
     return differing;
@@ -350,7 +352,7 @@ TEST(DecoderKernels, DescentRowMatchesReferenceOnRandomRowsOfEveryWidth)
                 << "width " << width << ", levels from " << lowest;
 }
 
-TEST(DecoderKernels, SweepRowMatchesReferenceOnRandomRowsOfEveryWidth)
+TEST(DecoderKernels, SweepRowsMatchReferencesOnRandomRowsOfEveryWidth)
 {
     // Every code (arrows 0-3, plateau arrows 4-7, flat 8), mostly arrows left
     // and right (long runs across the 4-label blocks), some labels unresolved.
@@ -367,9 +369,12 @@ TEST(DecoderKernels, SweepRowMatchesReferenceOnRandomRowsOfEveryWidth)
                 above[x] = rng() % 8 == 0 ? kUnresolved : static_cast<std::int32_t>(rng() % 1000);
                 fast[x] = reference[x] = rng() % 8 == 0 ? kUnresolved : static_cast<std::int32_t>(rng() % 1000);
             }
+            std::vector<std::int32_t> fastUpLeft = fast, referenceUpLeft = reference;
             sweepRow(code.data(), above.data(), fast.data(), width);
             sweepRowReference(code.data(), above.data(), reference.data(), width);
-            differing += fast != reference;
+            sweepRowUpLeft(code.data(), above.data(), fastUpLeft.data(), width);
+            sweepRowUpLeftReference(code.data(), above.data(), referenceUpLeft.data(), width);
+            differing += fast != reference || fastUpLeft != referenceUpLeft;
             ++rows;
         }
     EXPECT_EQ(differing, 0) << "of " << rows << " rows";
