@@ -1,6 +1,8 @@
 // Region colour statistics kernel (pipeline/decoder/simd.hpp).
 #include "pipeline/decoder/simd.hpp"
 
+#include <algorithm>
+
 #if defined(__ARM_NEON)
 #include <arm_neon.h>
 #elif defined(__SSE2__)
@@ -33,7 +35,8 @@ alignas(16) constexpr std::uint8_t kLeadingLanes[32] = {255, 255, 255, 255, 255,
 // Per byte k < 3 of the pixels (blocks whole blocks of 4, then the bytes of
 // the next block where restLanes is set), how many are below t[k]
 // (1 <= t[k] <= 255). blocks <= 254: the per-lane byte counters cannot
-// overflow.
+// overflow. (The block after the last is read even where restLanes is
+// empty.)
 #if defined(__ARM_NEON)
 using Bytes = uint8x16_t;
 inline Bytes loadBytes(const std::uint8_t* p) { return vld1q_u8(p); }
@@ -130,18 +133,28 @@ std::array<std::uint8_t, 3> channelMedians(const std::uint32_t* pixels, int coun
     const auto* bytes = reinterpret_cast<const std::uint8_t*>(pixels);
     const Bytes restLanes = loadBytes(kLeadingLanes + 16 - 4 * (count - 4 * blocks));
     if (count <= 255) return mediansInBytes(bytes, blocks, restLanes, count);
-    if (blocks <= 254) {
-        // Counts summed in 16 bits.
-        std::array<int, 3> m{};
-        for (int bit = 128; bit > 0; bit >>= 1) {
-            const std::array<int, 3> below = countBelow(bytes, blocks, restLanes, {m[0] | bit, m[1] | bit, m[2] | bit});
-            for (int k = 0; k < 3; ++k) m[k] |= below[k] <= count / 2 ? bit : 0;
+    // Larger regions: the counts summed in 16 bits per chunk of up to 254
+    // blocks (the byte counters' limit), over the chunks in int. (A
+    // histogram's increments wait on each other where neighbouring pixels
+    // share a value, as in large uniform regions.)
+    const Bytes noLanes = loadBytes(kLeadingLanes + 16);
+    std::array<int, 3> m{};
+    for (int bit = 128; bit > 0; bit >>= 1) {
+        const std::array<int, 3> t{m[0] | bit, m[1] | bit, m[2] | bit};
+        std::array<int, 3> below{};
+        for (int first = 0;; first += 254) {
+            const int chunk = std::min(254, blocks - first);
+            const bool last = first + chunk == blocks;
+            const std::array<int, 3> part = countBelow(bytes + 16 * first, chunk, last ? restLanes : noLanes, t);
+            for (int k = 0; k < 3; ++k) below[k] += part[k];
+            if (last) break;
         }
-        return {static_cast<std::uint8_t>(m[0]), static_cast<std::uint8_t>(m[1]), static_cast<std::uint8_t>(m[2])};
+        for (int k = 0; k < 3; ++k) m[k] |= below[k] <= count / 2 ? bit : 0;
     }
-#endif
-    // Large regions: a histogram's fixed cost is small per value.
+    return {static_cast<std::uint8_t>(m[0]), static_cast<std::uint8_t>(m[1]), static_cast<std::uint8_t>(m[2])};
+#else
     return channelMediansReference(pixels, count);
+#endif
 }
 
 }  // namespace stria::pipeline

@@ -144,7 +144,7 @@ TEST(DecoderKernels, EdgeLocationGradientsEqualReferenceOnSimulatorFrame)
 // Region medians whose fast selection differs from the reference: every
 // count up to 70 (around the 4-pixel blocks, and the tail alone) and a few
 // up to 3000 (past the 255 pixels the byte-lane search takes and the 254
-// blocks the 16-bit one takes), of random bytes, of
+// blocks of one chunk of the 16-bit sums), of random bytes, of
 // few distinct values (ties at the median) and of the extremes 0 and 255.
 int regionMediansDiffering(unsigned seed)
 {
