@@ -126,10 +126,16 @@ EqualizedChange equalizedChange(const DecoderWorkspace& ws, int from, int to)
 
 float matchError(const std::array<float, 3>& c, SymbolCode symbol, float t)
 {
-    return scaledMatchError(lanesOf(c), kSymbolTerms[symbol], 1 / (1 - t), 1 / t);
+    const MatchScales scales(t);
+    return scaledMatchError(lanesOf(c), kSymbolTerms[symbol], scales.on, scales.off);
 }
 
 float symbolError(const EqualizedChange& change, SymbolCode symbol, float t)
+{
+    return symbolError(change, symbol, MatchScales(t));
+}
+
+float symbolError(const EqualizedChange& change, SymbolCode symbol, const MatchScales& scales)
 {
     const Lanes c = lanesOf(change.c);
     const SymbolTerms& terms = kSymbolTerms[symbol];
@@ -155,7 +161,7 @@ float symbolError(const EqualizedChange& change, SymbolCode symbol, float t)
     const Lanes corrected = c - common;
     const float norm = largestOfChannels(absolute(corrected));
     const float divisor = common != 0 && norm > 0 ? norm : 1.0f;
-    return scaledMatchError(corrected / divisor, terms, 1 / (1 - t), 1 / t);
+    return scaledMatchError(corrected / divisor, terms, scales.on, scales.off);
 }
 
 SymbolCode optimalSymbol(const std::array<float, 3>& c, float t)
@@ -172,6 +178,7 @@ void computeEdgeFeatures(DecoderWorkspace& ws)
     // matter.
     Region* regions = ws.regions.get();
     const float t = static_cast<float>(ws.params.t);
+    const MatchScales scales(t);
     for (int e = 0; e < ws.edgeCount; ++e) {
         const GraphEdge& edge = ws.edges[e];
         Region& a = regions[edge.a];
@@ -215,7 +222,7 @@ void computeEdgeFeatures(DecoderWorkspace& ws)
         feature.gradientError = edge.primaryGradient > 0
                                     ? std::min(edge.secondaryGradient / edge.primaryGradient, kMaxGradientError)
                                     : kMaxGradientError;
-        feature.bestMatch = symbolError(change, bestSymbol, t);
+        feature.bestMatch = symbolError(change, bestSymbol, scales);
     }
 }
 

@@ -91,7 +91,7 @@ SymbolCode stripeSymbol(const StripePattern& pattern, int from, int to)
 class Traversal {
 public:
     explicit Traversal(DecoderWorkspace& ws)
-        : ws_(ws), features_(ws.edgeFeatures.get()), t_(static_cast<float>(ws.params.t)),
+        : ws_(ws), features_(ws.edgeFeatures.get()), t_(static_cast<float>(ws.params.t)), scales_(t_),
           alpha_(static_cast<float>(ws.params.alpha)), A_(static_cast<float>(ws.params.A)),
           beta_(static_cast<float>(ws.params.beta))
     {
@@ -142,7 +142,7 @@ private:
     {
         const float match = bestSymbolFrom(edge, from, to) == symbol
                                 ? edge.bestMatch
-                                : symbolError(equalizedChange(ws_, from, to), symbol, t_);
+                                : symbolError(equalizedChange(ws_, from, to), symbol, scales_);
         if (positionError) *positionError = beta_ * match / std::max(edge.weight, 1.0f) + edge.gradientError;
         return match + alpha_ * edge.gradientError;
     }
@@ -243,7 +243,7 @@ private:
                         if (needed == tried) continue;
                         tried = needed;
                         if (needed != best && !change) change = equalizedChange(ws_, endRegion, next);
-                        const float error = (needed == best ? edge.bestMatch : symbolError(*change, needed, t_)) +
+                        const float error = (needed == best ? edge.bestMatch : symbolError(*change, needed, scales_)) +
                                             alpha_ * edge.gradientError;
                         if (error < bestError) {
                             bestError = error;
@@ -607,7 +607,9 @@ private:
 
     DecoderWorkspace& ws_;
     const EdgeFeature* features_;
-    const float t_, alpha_, A_, beta_;
+    const float t_;
+    const MatchScales scales_;
+    const float alpha_, A_, beta_;
     std::int32_t* stripes_ = nullptr;  // the regions' stripes (run)
 };
 
