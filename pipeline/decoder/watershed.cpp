@@ -190,20 +190,25 @@ void computeWatershed(DecoderWorkspace& ws)
     // ends mispredict): each flat pixel gets a code for the row sweep, an
     // arrow left if its left neighbour is flat, else up if the upper one is
     // (plus kPlateauArrow, which the sweep ignores, where both are: the
-    // candidates for a union), else none; those without start a minimum
-    // (a provisional label, in raster order); sweepRowUpLeft copies the
-    // labels; where the left and upper labels then differ, their minima join.
+    // candidates for a union), else kDescentFlat: those start a minimum (a
+    // provisional label, in raster order); other pixels get kNotMinimum.
+    // sweepRowUpLeft copies the labels; where a candidate's left and upper
+    // labels then differ, their minima join.
     std::fill(label, label + n, kUnresolved);
     std::int32_t* parent = ws.pixelOrder;
     auto* minimumCode = reinterpret_cast<std::uint8_t*>(columns);
     int provisional = 0, minima = 0;
-    // Bit k set if byte k of the 8 at p has bit `bit` set.
-    auto bitsOf = [](const std::uint8_t* p, int bit) {
+    // The 8 codes at p as a word, and bit k set if byte k of a word has bit 0.
+    auto codes8 = [](const std::uint8_t* p) {
         static_assert(std::endian::native == std::endian::little, "byte k of the word is pixel k");
         std::uint64_t c;
         std::memcpy(&c, p, 8);
-        return static_cast<unsigned>((((c >> bit) & 0x0101010101010101ull) * 0x0102040810204080ull) >> 56);
+        return c;
     };
+    auto bitsOf = [](std::uint64_t word) {
+        return static_cast<unsigned>(((word & 0x0101010101010101ull) * 0x0102040810204080ull) >> 56);
+    };
+    constexpr std::uint8_t kNotMinimum = kDescentFlat | kPlateauArrow;  // not swept
     // The codes by byte masks, which the compiler vectorises (ternaries
     // became branches).
     auto mask = [](bool condition) { return static_cast<std::uint8_t>(-static_cast<int>(condition)); };
@@ -213,23 +218,25 @@ void computeWatershed(DecoderWorkspace& ws)
         // Row 0: the wall above (never flat); the labels read there unused.
         const std::uint8_t* codeAbove = y > 0 ? rowCode - w : wall;
         const std::int32_t* labelAbove = y > 0 ? row - w : row;
-        minimumCode[0] = rowCode[0] == kDescentFlat && codeAbove[0] == kDescentFlat ? kDescentUp : kDescentFlat;
+        minimumCode[0] = rowCode[0] != kDescentFlat ? kNotMinimum
+                         : codeAbove[0] == kDescentFlat ? kDescentUp
+                                                        : kDescentFlat;
         for (int x = 1; x < w; ++x) {
             const std::uint8_t flat = mask(rowCode[x] == kDescentFlat), up = mask(codeAbove[x] == kDescentFlat),
                                left = mask(rowCode[x - 1] == kDescentFlat);
             const std::uint8_t continued = (left & (kDescentLeft | (up & kPlateauArrow))) | (~left & ~up & kDescentFlat);
-            minimumCode[x] = (flat & continued) | (~flat & kDescentFlat);
+            minimumCode[x] = (flat & continued) | (~flat & kNotMinimum);
         }
-        // New minima, 64 pixels at a time as bits: flat, without a code (the
-        // codes are at most kDescentFlat: bit 3 is set only there).
+        // New minima, 64 pixels at a time as bits: code kDescentFlat, the
+        // only code with bit 3 and without bit 2.
         for (int x0 = 0; x0 < w; x0 += 64) {
             const int span = std::min(64, w - x0);
             std::uint64_t fresh = 0;
             int x = x0;
             for (; x + 8 <= x0 + span; x += 8)
-                fresh |= std::uint64_t{bitsOf(rowCode + x, 3) & bitsOf(minimumCode + x, 3)} << (x - x0);
-            for (; x < x0 + span; ++x)
-                fresh |= std::uint64_t{rowCode[x] == kDescentFlat && minimumCode[x] == kDescentFlat} << (x - x0);
+                fresh |= std::uint64_t{bitsOf(codes8(minimumCode + x) >> 3 & ~(codes8(minimumCode + x) >> 2))}
+                         << (x - x0);
+            for (; x < x0 + span; ++x) fresh |= std::uint64_t{minimumCode[x] == kDescentFlat} << (x - x0);
             for (; fresh != 0; fresh &= fresh - 1) {
                 const int p = y * w + x0 + std::countr_zero(fresh);
                 parent[provisional] = ~p;
@@ -245,7 +252,8 @@ void computeWatershed(DecoderWorkspace& ws)
             std::uint64_t candidates = 0;
             int x = x0;
             for (; x + 8 <= x0 + span; x += 8)
-                candidates |= std::uint64_t{bitsOf(minimumCode + x, 0) & bitsOf(minimumCode + x, 2)} << (x - x0);
+                candidates |= std::uint64_t{bitsOf(codes8(minimumCode + x) & codes8(minimumCode + x) >> 2)}
+                              << (x - x0);
             for (; x < x0 + span; ++x)
                 candidates |= std::uint64_t{minimumCode[x] == (kDescentLeft | kPlateauArrow)} << (x - x0);
             for (candidates &= borderMask(row + x0, labelAbove + x0, span); candidates != 0;
@@ -284,7 +292,11 @@ void computeWatershed(DecoderWorkspace& ws)
     }
     for (int y = 0; y < h; ++y) {
         const int count = flatColumns(code + y * w, w, columns);
-        for (int i = 0; i < count; ++i) label[y * w + columns[i]] = parent[~label[y * w + columns[i]]];
+        std::int32_t* row = label + y * w;
+        for (int i = 0; i < count; ++i) {
+            const int x = columns[i];
+            row[x] = parent[~row[x]];
+        }
     }
 
     // 4. Every other pixel takes the basin at the end of its arrows, row by
