@@ -103,14 +103,14 @@ void computeRegions(DecoderWorkspace& ws)
         if (whole < end) std::memcpy(out, pixel, 3);
     });
 
-    // channelMedians reads up to 3 pixels past a region's last: the last
+    // channelMedians reads up to 4 pixels past a region's last: the last
     // regions take the reference.
     const std::ptrdiff_t n = static_cast<std::ptrdiff_t>(w) * h;
     const cv::Matx33f& m = ws.colorCorrection;
     for (int r = 0; r < count; ++r) {
         const int size = regions[r].pixelCount;
         const std::int32_t first = counter[r] - size;
-        const std::array<std::uint8_t, 3> byByte = first + size + 3 <= n ? channelMedians(sorted + first, size)
+        const std::array<std::uint8_t, 3> byByte = first + size + 4 <= n ? channelMedians(sorted + first, size)
                                                                           : channelMediansReference(sorted + first, size);
         const cv::Vec3f median(byByte[ws.rgbOffset[0]], byByte[ws.rgbOffset[1]], byByte[ws.rgbOffset[2]]);
         const cv::Vec3f corrected = m * median;
