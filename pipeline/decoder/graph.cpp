@@ -106,14 +106,18 @@ void buildGraph(DecoderWorkspace& ws)
             e = (found & ~emptyMask) | (edgeCount & emptyMask);
             if (((edgeKey[e] ^ key) & ~static_cast<std::uint64_t>(std::int64_t{emptyMask})) == 0) break;
         }
-        if (((e ^ capacity) | ~emptyMask) == 0) {  // new, and no room left
-            ws.truncated = true;
-            return -1;
-        }
         table[slot] = e;
-        edgeKey[e] = key;
+        edgeKey[e] = key;  // e <= capacity: the scratch has room for one more
         edgeCount -= emptyMask;
-        if (edgeCount == cleared) clearAhead();
+        if (edgeCount >= cleared) {  // every 64 new edges, and once full
+            if (edgeCount > capacity) {  // new, and no room left: undone
+                table[slot] = -1;
+                edgeCount = capacity;
+                ws.truncated = true;
+                return -1;
+            }
+            clearAhead();
+        }
         return e;
     };
 
