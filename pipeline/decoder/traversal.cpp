@@ -549,28 +549,30 @@ private:
         const std::int32_t* link = ws_.edgeOrder.get();
         std::int32_t* pairs = ws_.scratch.get();
         int linkCount = 0;
+        // Without a branch (which edges link, and whether a run grows, is
+        // data): every edge's pair is written, the count advances by the
+        // test; the runs are stored raised or as they were.
         for (int e = 0; e < ws_.edgeCount; ++e) {
             const GraphEdge& edge = ws_.edges[e];
-            if (link[e] == kNoLink || stripes_[edge.a] < 0 || stripes_[edge.b] < 0) continue;
-            // lo = the region on the left (lower stripe side), hi = on the right.
-            const bool aLeft = features_[e].direction() == EdgeDirection::Forward;
-            pairs[2 * linkCount] = aLeft ? edge.a : edge.b;
-            pairs[2 * linkCount + 1] = 2 * (aLeft ? edge.b : edge.a) + (link[e] == kConfirmedLink ? 1 : 0);
-            ++linkCount;
+            // lo = the region on the left (lower stripe side), hi = on the
+            // right: a if the edge is forward, else b, by masks (GCC branched
+            // on the ?:).
+            const int aLeft = -static_cast<int>(features_[e].direction() == EdgeDirection::Forward);
+            const int lo = edge.b ^ ((edge.a ^ edge.b) & aLeft), hi = edge.a ^ edge.b ^ lo;
+            pairs[2 * linkCount] = lo;
+            pairs[2 * linkCount + 1] = 2 * hi + (link[e] == kConfirmedLink);
+            linkCount += (link[e] != kNoLink) & (stripes_[edge.a] >= 0) & (stripes_[edge.b] >= 0);
         }
         for (int sweep = 0; sweep < 2 * window + 2; ++sweep) {
             bool changed = false;
             for (int i = 0; i < linkCount; ++i) {
                 const int lo = pairs[2 * i], hi = pairs[2 * i + 1] >> 1, add = pairs[2 * i + 1] & 1;
                 const int newRight = std::min(window, right(hi) + add), newLeft = std::min(window, left(lo) + add);
-                if (newRight > right(lo)) {
-                    runs[lo] = (newRight << 16) | left(lo);
-                    changed = true;
-                }
-                if (newLeft > left(hi)) {
-                    runs[hi] = (right(hi) << 16) | newLeft;
-                    changed = true;
-                }
+                const int rightOfLo = right(lo);
+                runs[lo] = (std::max(newRight, rightOfLo) << 16) | left(lo);
+                const int leftOfHi = left(hi);  // lo != hi: unchanged by the store above
+                runs[hi] = (right(hi) << 16) | std::max(newLeft, leftOfHi);
+                changed |= (newRight > rightOfLo) | (newLeft > leftOfHi);
             }
             if (!changed) break;
         }
