@@ -352,6 +352,10 @@ private:
         if (f.reference >= 0)
             for (int c = 0; c < 3; ++c)
                 referenceWeight = std::max(referenceWeight, std::abs(f.color[c] - ws_.regions[f.reference].color[c]));
+        // The edges' features are read at random; requested together here,
+        // they arrive while the loop's mispredicted branches would otherwise
+        // discard the loads begun after them.
+        for (int i = 0; i < f.degree; ++i) __builtin_prefetch(&features_[ws_.adjacency[f.adjacencyBegin + i]]);
         for (int i = 0; i < f.degree; ++i) {
             const int e = ws_.adjacency[f.adjacencyBegin + i];
             const EdgeFeature& edge = features_[e];
