@@ -322,9 +322,10 @@ void computeWatershed(DecoderWorkspace& ws)
             // loads (often L1 misses: a step down is a row away), so two
             // independent chains overlap their misses (more mispredicted
             // branches, at each walk's end, but less waiting; 3 or 4 walks
-            // were slower). Walks that meet end at the same pixel (arrows
-            // are unique), so labelling one path over the other writes the
-            // same basin.
+            // were slower): both step until one ends, then the other goes on
+            // alone. Walks that meet end at the same pixel (arrows are
+            // unique), so labelling one path over the other writes the same
+            // basin.
             while (bits != 0) {
                 const int p1 = y * w + x0 + std::countr_zero(bits);
                 bits &= bits - 1;
@@ -337,12 +338,12 @@ void computeWatershed(DecoderWorkspace& ws)
                 const int p2 = y * w + x0 + std::countr_zero(bits);
                 bits &= bits - 1;
                 int q2 = p2;
-                for (;;) {
-                    const bool more1 = label[q1] == kUnresolved, more2 = label[q2] == kUnresolved;
-                    if (!(more1 | more2)) break;
-                    if (more1) q1 += step[code[q1] & 3];
-                    if (more2) q2 += step[code[q2] & 3];
+                while (label[q1] == kUnresolved && label[q2] == kUnresolved) {
+                    q1 += step[code[q1] & 3];
+                    q2 += step[code[q2] & 3];
                 }
+                while (label[q1] == kUnresolved) q1 += step[code[q1] & 3];
+                while (label[q2] == kUnresolved) q2 += step[code[q2] & 3];
                 labelPath(p1, q1);
                 labelPath(p2, q2);
             }
