@@ -103,7 +103,9 @@ Result<std::unique_ptr<Decoder>> Decoder::create(const StripePattern& pattern, c
                              std::to_string(1 << EdgeFeature::kEndBits) + " are supported");
 
     std::size_t& bytes = ws->allocatedBytes;
-    ws->gradient = allocate<std::uint8_t>(n, bytes);
+    const std::size_t borderBytes = sizeof(std::uint64_t) * static_cast<std::size_t>(borderWords(w)) * h;
+    ws->gradient = allocate<std::uint8_t>(std::max(n, borderBytes), bytes);
+    ws->rowBorders = reinterpret_cast<std::uint64_t*>(ws->gradient.get());
     ws->labels = allocate<std::int32_t>(n, bytes);
     ws->maxPoints = std::min<int>(ws->maxPoints, static_cast<int>(n * sizeof(std::int32_t) / sizeof(ScanPoint)));
     ws->orderAndPoints = allocate<std::byte>(

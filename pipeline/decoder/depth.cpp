@@ -116,6 +116,7 @@ void computePoints(DecoderWorkspace& ws)
         const std::int32_t* label = labels + static_cast<std::ptrdiff_t>(y) * w;
         const std::uint8_t* row = ws.frame.row(y);
         const RowRays rays(ws, y);
+        const std::uint64_t* borders = ws.rowBorders + static_cast<std::ptrdiff_t>(y) * borderWords(w);
         std::fill(rowPoint, rowPoint + edgeCount, -1);
         // The next row's pixels and labels on their way to the cache while
         // this row is located: the windows read most of a row's cache lines
@@ -129,11 +130,11 @@ void computePoints(DecoderWorkspace& ws)
         int count = 0;
         for (int x0 = 0; x0 < w - 1; x0 += 64) {
             // Step 1: label changes between regions decoded as consecutive
-            // stripes k, k + 1, from borderMask's masks, gathered without a
+            // stripes k, k + 1, from the regions stage's border masks, gathered without a
             // branch per change: whether two neighbours share a label, and
             // whether their stripes are consecutive, is noise to a branch
             // predictor (85 000 and 22 000 mispredictions per 780x580 frame).
-            for (std::uint64_t bits = borderMask(label + x0, label + x0 + 1, std::min(64, w - 1 - x0)); bits; bits &= bits - 1) {
+            for (std::uint64_t bits = borders[x0 / 64]; bits; bits &= bits - 1) {
                 const int x = x0 + std::countr_zero(bits);
                 const int leftStripe = stripes[label[x]], rightStripe = stripes[label[x + 1]];
                 at[count] = x;

@@ -142,7 +142,7 @@ void buildGraph(DecoderWorkspace& ws)
         const std::uint8_t* up = ws.frame.row(std::max(y - 1, 0));
         const std::uint8_t* pixels = ws.frame.row(y);
         const std::uint8_t* down = ws.frame.row(std::min(y + 1, h - 1));
-        forEachBorder(row, row + 1, w - 1, [&](int x) {
+        forEachBit(ws.rowBorders + static_cast<std::ptrdiff_t>(y) * borderWords(w), w - 1, [&](int x) {
             addPair(row[x], row[x + 1], true,
                     x + 2 < w ? horizontalPairGradient(up, pixels, down, x, ws.primary)
                               : pairGradient(ws.frame, x, y, true, ws.primary));

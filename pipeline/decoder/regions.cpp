@@ -6,7 +6,8 @@
 // corrected for camera crosstalk.
 //
 // Two raster passes over the runs of equal labels in each row (their ends
-// from forEachBorder, without a branch per pixel): the first counts each
+// from forEachBorder, without a branch per pixel, whose masks the first pass
+// stores for the second and for the graph and depth stages): the first counts each
 // region's pixels and sums their coordinates; the second, with the counts as
 // offsets (a counting sort by label), copies each run's pixels, 4 bytes each,
 // into the watershed's order buffer, where each region's pixels then lie
@@ -43,19 +44,27 @@ void computeRegions(DecoderWorkspace& ws)
     std::int32_t* regionEnd = counter + count;
     std::fill(counter, counter + count, 0);
 
-    // Calls run(x, end, y, r) for each run [x, end) of label r in row y.
-    auto forEachRun = [&](auto run) {
+    // Calls run(x, end, y, r) for each run [x, end) of label r in row y. The
+    // first pass stores the rows' border masks (ws.rowBorders), which the
+    // second pass and the graph and depth stages walk again.
+    const int words = borderWords(w);
+    auto forEachRun = [&](bool first, auto run) {
         for (int y = 0; y < h; ++y) {
             const std::int32_t* row = label + static_cast<std::ptrdiff_t>(y) * w;
+            std::uint64_t* masks = ws.rowBorders + static_cast<std::ptrdiff_t>(y) * words;
             int x = 0;
-            forEachBorder(row, row + 1, w - 1, [&](int last) {
+            auto visit = [&](int last) {
                 run(x, last + 1, y, row[x]);
                 x = last + 1;
-            });
+            };
+            if (first)
+                forEachBorder(row, row + 1, w - 1, masks, visit);
+            else
+                forEachBit(masks, w - 1, visit);
             run(x, w, y, row[x]);
         }
     };
-    forEachRun([&](int x, int end, int y, std::int32_t r) {
+    forEachRun(true, [&](int x, int end, int y, std::int32_t r) {
         const std::int64_t length = end - x;
         counter[r] += static_cast<std::int32_t>(length);
         sums[2 * r] += (x + end - 1) * length;  // twice the x sum (halved once per region)
@@ -76,7 +85,7 @@ void computeRegions(DecoderWorkspace& ws)
     // has no next byte: 3 copied).
     auto* sorted = reinterpret_cast<std::uint32_t*>(ws.pixelOrder);
     const int blockRows = w >= 4 ? h - 1 : 0;  // rows whose next row has 10 bytes
-    forEachRun([&](int x, int end, int y, std::int32_t r) {
+    forEachRun(false, [&](int x, int end, int y, std::int32_t r) {
         const std::uint8_t* pixel = ws.frame.row(y) + 3 * x;
         std::uint32_t* out = sorted + counter[r];
         counter[r] += end - x;

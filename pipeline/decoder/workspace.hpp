@@ -98,6 +98,11 @@ struct DecoderWorkspace {
 
     // Per pixel.
     std::unique_ptr<std::uint8_t[]> gradient;
+    // In the gradient buffer, free after the watershed: each label row's
+    // horizontal borders, borderWords(width) masks per row, bit x set where
+    // label x differs from label x + 1; written by the regions stage, read by
+    // the graph and depth stages (instead of comparing the labels again).
+    std::uint64_t* rowBorders = nullptr;
     std::unique_ptr<std::int32_t[]> labels;
     // One buffer, four uses in turn: the watershed's plateau queue and
     // union-find parents, then pixels sorted by label (regions), then the
@@ -139,6 +144,9 @@ struct DecoderWorkspace {
 
     std::size_t allocatedBytes = 0;  // by create(): Decoder::workspaceBytes()
 };
+
+// The 64-bit masks of a row's horizontal borders (DecoderWorkspace::rowBorders).
+inline int borderWords(int width) { return (width + 62) / 64; }
 
 // Watershed: the scratch entries it needs (a descent code byte per pixel).
 std::size_t watershedScratchEntries(int width, int height);

@@ -520,7 +520,9 @@ struct FloodCase {
         ws.width = image.cols;
         ws.height = image.rows;
         ws.maxRegions = maxRegions;
-        ws.gradient = std::make_unique<std::uint8_t[]>(n);
+        ws.gradient =
+            std::make_unique<std::uint8_t[]>(std::max(n, 8 * static_cast<std::size_t>(borderWords(image.cols)) * image.rows));
+        ws.rowBorders = reinterpret_cast<std::uint64_t*>(ws.gradient.get());
         ws.labels = std::make_unique<std::int32_t[]>(n);
         ws.maxEdges = 3 * maxRegions;
         ws.orderAndPoints = std::make_unique<std::byte[]>(4 * std::max(n, graphTableEntries(maxRegions, ws.maxEdges)));
