@@ -6,6 +6,8 @@
 
 #if defined(__ARM_NEON)
 #include <arm_neon.h>
+#elif defined(__SSE2__)
+#include <emmintrin.h>
 #endif
 
 namespace stria::pipeline {
@@ -71,6 +73,24 @@ inline void gradient16(const std::uint8_t* up, const std::uint8_t* row, const st
     vst1q_u8(along, vcombine_u8(vmovn_u16(bestAlong[0]), vmovn_u16(bestAlong[1])));
     for (int k = 0; k < 16; ++k) ++alongCounts[(x + k) & 3][along[k]];
 }
+#elif defined(__SSE2__)
+// The maximum over the three channels of 16 pixels of interleaved bytes:
+// each round interleaves the low halves of (a, high half of b), (high half of
+// a, c), (b, high half of c); after 4 rounds a vector holds one channel (the
+// de-interleave of OpenCV's SSE2 v_load_deinterleave).
+inline __m128i channelMax(const std::uint8_t* lanes)
+{
+    __m128i a = _mm_loadu_si128(reinterpret_cast<const __m128i*>(lanes));
+    __m128i b = _mm_loadu_si128(reinterpret_cast<const __m128i*>(lanes + 16));
+    __m128i c = _mm_loadu_si128(reinterpret_cast<const __m128i*>(lanes + 32));
+    for (int round = 0; round < 4; ++round) {
+        const __m128i na = _mm_unpacklo_epi8(a, _mm_unpackhi_epi64(b, b));
+        const __m128i nb = _mm_unpacklo_epi8(_mm_unpackhi_epi64(a, a), c);
+        const __m128i nc = _mm_unpacklo_epi8(b, _mm_unpackhi_epi64(c, c));
+        a = na, b = nb, c = nc;
+    }
+    return _mm_max_epu8(_mm_max_epu8(a, b), c);
+}
 #endif
 
 }  // namespace
@@ -97,9 +117,7 @@ void gradientRow(const std::uint8_t* up, const std::uint8_t* row, const std::uin
     // in loops the compiler vectorises: separable Sobel in int16 lanes, then
     // the magnitude halved ((s + 1) / 2 keeps the order, so its maximum is
     // the halved maximum) and the along gradient, both <= 255, in byte lanes;
-    // per lane the maximum over it and the next two (for i = 3x: pixel x's
-    // channels), 16 lanes per instruction; only the pick of every third
-    // lane is scalar.
+    // then per pixel the maximum over its three lanes.
     const int bytes = 3 * width;
     std::int16_t* smooth = lanes;            // up + 2 row + down
     std::int16_t* vertical = lanes + bytes;  // down - up
@@ -117,24 +135,24 @@ void gradientRow(const std::uint8_t* up, const std::uint8_t* row, const std::uin
         halfSum[i] = static_cast<std::uint8_t>((gx + gy + 1) >> 1);
         alongLane[i] = static_cast<std::uint8_t>(alongY ? gy : gx);
     }
-    // The maxima in the int16 lanes' memory, free by now.
-    auto* best = reinterpret_cast<std::uint8_t*>(lanes);
-    std::uint8_t* bestAlong = best + bytes;
-    for (int i = 3; i < bytes - 5; ++i) {
-        best[i] = std::max(std::max(halfSum[i], halfSum[i + 1]), halfSum[i + 2]);
-        bestAlong[i] = std::max(std::max(alongLane[i], alongLane[i + 1]), alongLane[i + 2]);
+#if defined(__SSE2__)
+    // 16 pixels per step, the lanes split into their channels (instead of a
+    // running maximum over three lanes and a scalar pick of every third:
+    // 0.54 -> 0.50 ms at 780x580).
+    // The along maxima pass through the int16 lanes' memory, free by now (GCC
+    // would extract each byte of a local array from the register by a store).
+    auto* along = reinterpret_cast<std::uint8_t*>(lanes);
+    for (; x + 16 < width; x += 16) {
+        _mm_storeu_si128(reinterpret_cast<__m128i*>(magnitude + x), channelMax(halfSum + 3 * x));
+        _mm_storeu_si128(reinterpret_cast<__m128i*>(along), channelMax(alongLane + 3 * x));
+        // x = 1 mod 16, so each pixel's histogram copy is a constant.
+        for (int k = 0; k < 16; ++k) ++alongCounts[(1 + k) & 3][along[k]];
     }
-    // The histogram counted here, from the lanes (no along row to store and
-    // load again); 4 pixels per step, x = 1 mod 4, so that each one's copy
-    // is a constant.
-    for (; x + 4 < width; x += 4)
-        for (int k = 0; k < 4; ++k) {
-            magnitude[x + k] = best[3 * (x + k)];
-            ++alongCounts[(1 + k) & 3][bestAlong[3 * (x + k)]];
-        }
+#endif
     for (; x + 1 < width; ++x) {
-        magnitude[x] = best[3 * x];
-        ++alongCounts[x & 3][bestAlong[3 * x]];
+        const int i = 3 * x;
+        magnitude[x] = std::max(std::max(halfSum[i], halfSum[i + 1]), halfSum[i + 2]);
+        ++alongCounts[x & 3][std::max(std::max(alongLane[i], alongLane[i + 1]), alongLane[i + 2])];
     }
 #endif
     for (; x < width; ++x) gradientPixel(up, row, down, width, alongY, x, magnitude, alongCounts);
