@@ -91,6 +91,21 @@ inline __m128i channelMax(const std::uint8_t* lanes)
     }
     return _mm_max_epu8(_mm_max_epu8(a, b), c);
 }
+
+inline __m128i load8(const std::uint8_t* p)
+{
+    return _mm_loadu_si128(reinterpret_cast<const __m128i*>(p));
+}
+
+inline __m128i load16(const std::int16_t* p)
+{
+    return _mm_loadu_si128(reinterpret_cast<const __m128i*>(p));
+}
+
+inline void store16(std::int16_t* p, __m128i v)
+{
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(p), v);
+}
 #endif
 
 }  // namespace
@@ -114,20 +129,58 @@ void gradientRow(const std::uint8_t* up, const std::uint8_t* row, const std::uin
     for (; x + 16 < width; x += 16) gradient16(up, row, down, alongY, x, magnitude, alongCounts);
 #else
     // Per byte lane i (pixel i / 3, channel i % 3) of the interior pixels,
-    // in loops the compiler vectorises: separable Sobel in int16 lanes, then
-    // the magnitude halved ((s + 1) / 2 keeps the order, so its maximum is
-    // the halved maximum) and the along gradient, both <= 255, in byte lanes;
-    // then per pixel the maximum over its three lanes.
+    // in SSE2 (each scalar loop is the reference and tail of the SSE2 loop
+    // before it; GCC vectorises it on other targets): separable Sobel in
+    // int16 lanes, then the magnitude halved ((s + 1) / 2 keeps the order, so
+    // its maximum is the halved maximum) and the along gradient, both <= 255,
+    // in byte lanes; then per pixel the maximum over its three lanes.
     const int bytes = 3 * width;
     std::int16_t* smooth = lanes;            // up + 2 row + down
     std::int16_t* vertical = lanes + bytes;  // down - up
     auto* halfSum = reinterpret_cast<std::uint8_t*>(lanes + 2 * bytes);  // (|dx| + |dy| + 1) / 2
     std::uint8_t* alongLane = halfSum + bytes;
-    for (int i = 0; i < bytes; ++i) {
+    int i = 0;
+#if defined(__SSE2__)
+    // As the loop below, each row loaded once (GCC loaded up and down twice).
+    for (; i + 16 <= bytes; i += 16) {
+        const __m128i zero = _mm_setzero_si128();
+        const __m128i u = load8(up + i), r = load8(row + i), d = load8(down + i);
+        const __m128i uw[2] = {_mm_unpacklo_epi8(u, zero), _mm_unpackhi_epi8(u, zero)};
+        const __m128i rw[2] = {_mm_unpacklo_epi8(r, zero), _mm_unpackhi_epi8(r, zero)};
+        const __m128i dw[2] = {_mm_unpacklo_epi8(d, zero), _mm_unpackhi_epi8(d, zero)};
+        for (int half = 0; half < 2; ++half) {
+            store16(smooth + i + 8 * half,
+                    _mm_add_epi16(_mm_add_epi16(uw[half], dw[half]), _mm_add_epi16(rw[half], rw[half])));
+            store16(vertical + i + 8 * half, _mm_sub_epi16(dw[half], uw[half]));
+        }
+    }
+#endif
+    for (; i < bytes; ++i) {
         smooth[i] = static_cast<std::int16_t>(up[i] + 2 * row[i] + down[i]);
         vertical[i] = static_cast<std::int16_t>(down[i] - up[i]);
     }
-    for (int i = 3; i < bytes - 3; ++i) {
+    i = 3;
+#if defined(__SSE2__)
+    // As the loop below, with pavgw for (gx + gy + 1) >> 1 and no masks
+    // before the byte packs (GCC masks each value it packs).
+    for (; i + 16 <= bytes - 3; i += 16) {
+        __m128i gx[2], gy[2];
+        for (int half = 0; half < 2; ++half) {
+            const int j = i + 8 * half;
+            const __m128i dx = _mm_sub_epi16(load16(smooth + j + 3), load16(smooth + j - 3));
+            const __m128i v = load16(vertical + j);
+            const __m128i dy = _mm_add_epi16(_mm_add_epi16(load16(vertical + j - 3), load16(vertical + j + 3)),
+                                             _mm_add_epi16(v, v));
+            gx[half] = _mm_srli_epi16(_mm_max_epi16(dx, _mm_sub_epi16(_mm_setzero_si128(), dx)), 2);
+            gy[half] = _mm_srli_epi16(_mm_max_epi16(dy, _mm_sub_epi16(_mm_setzero_si128(), dy)), 2);
+        }
+        _mm_storeu_si128(reinterpret_cast<__m128i*>(halfSum + i),
+                         _mm_packus_epi16(_mm_avg_epu16(gx[0], gy[0]), _mm_avg_epu16(gx[1], gy[1])));
+        _mm_storeu_si128(reinterpret_cast<__m128i*>(alongLane + i),
+                         alongY ? _mm_packus_epi16(gy[0], gy[1]) : _mm_packus_epi16(gx[0], gx[1]));
+    }
+#endif
+    for (; i < bytes - 3; ++i) {
         const std::int16_t dx = static_cast<std::int16_t>(smooth[i + 3] - smooth[i - 3]);
         const std::int16_t dy = static_cast<std::int16_t>(vertical[i - 3] + 2 * vertical[i] + vertical[i + 3]);
         const std::int16_t gx = static_cast<std::int16_t>((dx < 0 ? -dx : dx) >> 2);
