@@ -170,7 +170,9 @@ void sweepRow(const std::uint8_t* code, const std::int32_t* above, std::int32_t*
 {
     sweepRowUpLeft(code, above, row, width);
     const int blocks = width & ~3;
-    // The same from the right (the tail first), lanes mirrored.
+    // The same from the right (the tail first), lanes mirrored. (Written out
+    // twice on purpose: one always_inline scan for both directions, with the
+    // shuffle masks as arguments, cost 3 % more instructions in this kernel.)
     std::int32_t next = kUnresolved;
     for (int x = width - 1; x >= blocks; --x) {
         if ((code[x] & kArrowBits) == kDescentRight) row[x] = next;
