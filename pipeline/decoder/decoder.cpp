@@ -108,8 +108,8 @@ Result<std::unique_ptr<Decoder>> Decoder::create(const StripePattern& pattern, c
     ws->rowBorders = reinterpret_cast<std::uint64_t*>(ws->gradient.get());
     ws->labels = allocate<std::int32_t>(n, bytes);
     ws->maxPoints = std::min<int>(ws->maxPoints, static_cast<int>(n * sizeof(std::int32_t) / sizeof(ScanPoint)));
-    ws->orderAndPoints = allocate<std::byte>(
-        std::max<std::size_t>(n, graphTableEntries(ws->maxRegions, ws->maxEdges)) * sizeof(std::int32_t), bytes);
+    ws->orderEntries = std::max<std::size_t>(n, graphTableEntries(ws->maxRegions, ws->maxEdges));
+    ws->orderAndPoints = allocate<std::byte>(ws->orderEntries * sizeof(std::int32_t), bytes);
     ws->pixelOrder = reinterpret_cast<std::int32_t*>(ws->orderAndPoints.get());
     ws->points = reinterpret_cast<ScanPoint*>(ws->orderAndPoints.get());
     ws->scratch = allocate<std::int32_t>(scratchEntries(w, h, ws->maxRegions, ws->maxEdges), bytes);

@@ -75,8 +75,8 @@ void buildGraph(DecoderWorkspace& ws)
     // selected, not branched on: the empty slot takes the next edge index,
     // whose record is cleared ahead. (A per-region list walk here cost one
     // mispredicted branch per look-up.)
-    const std::size_t room = std::max(static_cast<std::size_t>(w) * h, graphTableEntries(ws.maxRegions, ws.maxEdges));
-    const std::size_t tableSize = std::min(std::bit_floor(room), 2 * graphTableEntries(ws.regionCount, ws.maxEdges));
+    const std::size_t tableSize =
+        std::min(std::bit_floor(ws.orderEntries), 2 * graphTableEntries(ws.regionCount, ws.maxEdges));
     const int shift = 64 - std::countr_zero(tableSize);
     std::int32_t* table = ws.pixelOrder;
     std::fill(table, table + tableSize, -1);

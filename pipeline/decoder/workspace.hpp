@@ -109,6 +109,7 @@ struct DecoderWorkspace {
     // graph's hash table of label pairs, then the output points (depth).
     // Points are 24 bytes, so maxPoints = pixels / 6 fits exactly.
     std::unique_ptr<std::byte[]> orderAndPoints;
+    std::size_t orderEntries = 0;  // its size in int32 entries: max(pixels, graphTableEntries)
     std::int32_t* pixelOrder = nullptr;
     ScanPoint* points = nullptr;
     // Gradient row lanes, watershed descent codes, region sums, the graph

@@ -397,6 +397,7 @@ Basins watershedOf(const std::vector<std::uint8_t>& g, int w, int h, int maxRegi
     ws.gradient = std::make_unique<std::uint8_t[]>(n);
     std::copy(g.begin(), g.end(), ws.gradient.get());
     ws.labels = std::make_unique<std::int32_t[]>(n);
+    ws.orderEntries = n;
     ws.orderAndPoints = std::make_unique<std::byte[]>(4 * n);
     ws.pixelOrder = reinterpret_cast<std::int32_t*>(ws.orderAndPoints.get());
     ws.scratch = std::make_unique<std::int32_t[]>(scratchEntries(w, h, maxRegions, 3 * maxRegions));
@@ -525,7 +526,8 @@ struct FloodCase {
         ws.rowBorders = reinterpret_cast<std::uint64_t*>(ws.gradient.get());
         ws.labels = std::make_unique<std::int32_t[]>(n);
         ws.maxEdges = 3 * maxRegions;
-        ws.orderAndPoints = std::make_unique<std::byte[]>(4 * std::max(n, graphTableEntries(maxRegions, ws.maxEdges)));
+        ws.orderEntries = std::max(n, graphTableEntries(maxRegions, ws.maxEdges));
+        ws.orderAndPoints = std::make_unique<std::byte[]>(4 * ws.orderEntries);
         ws.pixelOrder = reinterpret_cast<std::int32_t*>(ws.orderAndPoints.get());
         ws.scratch = std::make_unique<std::int32_t[]>(scratchEntries(image.cols, image.rows, maxRegions, ws.maxEdges));
         ws.regions = std::make_unique<Region[]>(maxRegions);
