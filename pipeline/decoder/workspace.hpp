@@ -158,7 +158,7 @@ std::size_t graphScratchEntries(std::size_t regions, std::size_t edges);
 // the buffer holds max(pixels, this)).
 std::size_t graphTableEntries(std::size_t regions, std::size_t edges);
 // The scratch every stage's share fits in (decoder.cpp): the gradient kernel's
-// row lanes, the watershed's codes, the region sums, the graph's edge lists;
+// row lanes, the watershed's codes, the region sums, the graph edges' label pairs;
 // the traversal's seed keys and link pairs (2 entries per edge) and depth's
 // region stripes fit in the graph's share.
 std::size_t scratchEntries(int width, int height, int maxRegions, int maxEdges);
