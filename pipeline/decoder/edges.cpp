@@ -23,7 +23,15 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
+#include <cstring>
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#elif defined(__aarch64__)
+#include <arm_neon.h>
+#endif
 
 namespace stria::pipeline {
 namespace {
@@ -58,7 +66,8 @@ using Lanes = float __attribute__((vector_size(16)));
 using LaneMask = std::int32_t __attribute__((vector_size(16)));
 
 Lanes lanesOf(const std::array<float, 3>& c) { return Lanes{c[0], c[1], c[2], 0}; }
-Lanes select(LaneMask mask, Lanes a, Lanes b) { return (Lanes)((mask & (LaneMask)a) | (~mask & (LaneMask)b)); }
+LaneMask select(LaneMask mask, LaneMask a, LaneMask b) { return (mask & a) | (~mask & b); }
+Lanes select(LaneMask mask, Lanes a, Lanes b) { return (Lanes)select(mask, (LaneMask)a, (LaneMask)b); }
 Lanes absolute(Lanes v) { return (Lanes)((LaneMask)v & 0x7fffffff); }
 float largestOfChannels(Lanes v) { return std::max({v[0], v[1], v[2]}); }
 // std::min and std::max of two floats as vector selects: GCC compiles the
@@ -171,6 +180,107 @@ SymbolCode optimalSymbol(const std::array<float, 3>& c, float t)
     return makeSymbol(s[0], s[1], s[2]);
 }
 
+namespace {
+
+// The edge stage's lanes: 4 edges at once, one per lane, each channel in a
+// vector of its own. Per lane these are the operations of equalizedChange,
+// optimalSymbol, symbolError and the direction test above, in their order, so
+// they give the same floats (tests/decoder/test_kernels.cpp compares the stage
+// with those functions edge by edge); but the chains of divisions and the
+// square root of 4 edges run together, where one edge's chain kept the core
+// waiting, and the maxima over the channels are maxima of vectors.
+constexpr int kBlock = 4;
+
+void transpose(Lanes v[4])  // rows to columns: v[j][i] = v[i][j] before
+{
+    using Index = LaneMask;
+    const Lanes t0 = __builtin_shuffle(v[0], v[1], Index{0, 4, 1, 5}), t1 = __builtin_shuffle(v[2], v[3], Index{0, 4, 1, 5});
+    const Lanes t2 = __builtin_shuffle(v[0], v[1], Index{2, 6, 3, 7}), t3 = __builtin_shuffle(v[2], v[3], Index{2, 6, 3, 7});
+    v[0] = __builtin_shuffle(t0, t1, Index{0, 1, 4, 5});
+    v[1] = __builtin_shuffle(t0, t1, Index{2, 3, 6, 7});
+    v[2] = __builtin_shuffle(t2, t3, Index{0, 1, 4, 5});
+    v[3] = __builtin_shuffle(t2, t3, Index{2, 3, 6, 7});
+}
+
+Lanes lanesOf(float v) { return Lanes{} + v; }
+Lanes floatsOf(LaneMask v) { return __builtin_convertvector(v, Lanes); }
+// std::max({x, y, z}) per lane: the first of the largest.
+Lanes largestOf(Lanes x, Lanes y, Lanes z)
+{
+    const Lanes m = select(x < y, y, x);
+    return select(m < z, z, m);
+}
+Lanes squareRoot(Lanes v)
+{
+#if defined(__SSE2__)
+    return _mm_sqrt_ps(v);
+#elif defined(__aarch64__)
+    return vsqrtq_f32(v);
+#else
+    for (int i = 0; i < kBlock; ++i) v[i] = std::sqrt(v[i]);
+    return v;
+#endif
+}
+
+struct SymbolLanes {
+    Lanes weight;       // eq. 3
+    LaneMask symbol;    // optimalSymbol
+    Lanes bestMatch;    // its symbolError
+    Lanes rawChange[3]; // |to - from| per channel (eq. 1)
+};
+
+// Eq. 3-7 from colour from to colour to (R G B lanes).
+SymbolLanes bestSymbolLanes(const Lanes from[3], const Lanes to[3], float t, const MatchScales& scales)
+{
+    SymbolLanes out;
+    Lanes raw[3], c[3];
+    for (int ch = 0; ch < 3; ++ch) {
+        raw[ch] = to[ch] - from[ch];
+        const Lanes half = 0.5f * (from[ch] + to[ch]);
+        c[ch] = raw[ch] / select(half < kMinBrightness, lanesOf(kMinBrightness), half);
+        out.rawChange[ch] = absolute(raw[ch]);
+    }
+    out.weight = largestOf(out.rawChange[0], out.rawChange[1], out.rawChange[2]);
+    const Lanes relative = largestOf(absolute(c[0]), absolute(c[1]), absolute(c[2]));
+    for (Lanes& v : c) v = select(relative > 0, v / relative, v);
+    // The optimal symbol's signs: (c >= t) - (c <= -t), from masks of -1.
+    LaneMask sign[3], count[3] = {};  // count: falling, constant, rising
+    Lanes group[3] = {};              // the channel sums of each group
+    for (int ch = 0; ch < 3; ++ch) {
+        sign[ch] = (c[ch] <= -t) - (c[ch] >= t);
+        const LaneMask member[3] = {sign[ch] < 0, sign[ch] == 0, sign[ch] > 0};
+        for (int g = 0; g < 3; ++g) {
+            group[g] += select(member[g], c[ch], Lanes{});
+            count[g] -= member[g];
+        }
+    }
+    out.symbol = (sign[0] + 1) * 9 + (sign[1] + 1) * 3 + (sign[2] + 1);
+    // symbolError of that symbol: its terms (kSymbolTerms) from the counts.
+    auto scaleOf = [](LaneMask n) { return select(n == 2, lanesOf(0.5f), lanesOf(1.0f)); };
+    auto flag = [](LaneMask m) { return select(m, lanesOf(1.0f), Lanes{}); };
+    const Lanes viaMidpoint = 0.5f * (group[0] * scaleOf(count[0]) + group[2] * scaleOf(count[2]));
+    const Lanes viaConstant = select(count[1] == 3, group[1] / 3.0f, group[1] * scaleOf(count[1]));
+    Lanes common = viaConstant * flag(count[1] > 0) + viaMidpoint * flag((count[1] == 0) & (count[0] > 0) & (count[2] > 0));
+    const Lanes share = kMaxAlbedoChange / relative;
+    const Lanes bound = select(relative > 0, select(share < kMaxCommonShare, share, lanesOf(kMaxCommonShare)), Lanes{});
+    common = select(bound < common, bound, common);
+    common = select(common < -bound, -bound, common);
+    Lanes corrected[3];
+    for (int ch = 0; ch < 3; ++ch) corrected[ch] = c[ch] - common;
+    const Lanes norm = largestOf(absolute(corrected[0]), absolute(corrected[1]), absolute(corrected[2]));
+    const Lanes divisor = select((common != 0) & (norm > 0), norm, lanesOf(1.0f));
+    Lanes sum{};
+    for (int ch = 0; ch < 3; ++ch) {
+        const Lanes x = corrected[ch] / divisor;
+        const Lanes e = select(sign[ch] == 0, absolute(x) * scales.off, (1.0f - floatsOf(sign[ch]) * x) * scales.on);
+        sum = ch == 0 ? e * e : sum + e * e;
+    }
+    out.bestMatch = squareRoot(sum);
+    return out;
+}
+
+}  // namespace
+
 void computeEdgeFeatures(DecoderWorkspace& ws)
 {
     // One pass over the edges (three passes streamed them three times); the
@@ -179,50 +289,68 @@ void computeEdgeFeatures(DecoderWorkspace& ws)
     Region* regions = ws.regions.get();
     const float t = static_cast<float>(ws.params.t);
     const MatchScales scales(t);
-    for (int e = 0; e < ws.edgeCount; ++e) {
-        const GraphEdge& edge = ws.edges[e];
-        Region& a = regions[edge.a];
-        Region& b = regions[edge.b];
+    for (int e0 = 0; e0 < ws.edgeCount; e0 += kBlock) {
+        const int n = std::min(kBlock, ws.edgeCount - e0);
+        // Lanes past the last edge repeat it; their results are not stored.
+        const GraphEdge* edge[kBlock];
+        Region* a[kBlock];
+        Region* b[kBlock];
+        Lanes from[4], to[4], fromCentroid[4], toCentroid[4], border[4];
+        LaneMask ends{};
+        for (int i = 0; i < kBlock; ++i) {
+            edge[i] = &ws.edges[e0 + std::min(i, n - 1)];
+            a[i] = &regions[edge[i]->a];
+            b[i] = &regions[edge[i]->b];
+            ends[i] = edge[i]->a ^ edge[i]->b;
+            // 16 bytes from the colour (R G B, range[0]), the centroid
+            // (x, y and two ints) and the edge's border (count, normal,
+            // gradients), transposed: a vector per field.
+            std::memcpy(&from[i], a[i]->color.data(), sizeof(Lanes));
+            std::memcpy(&to[i], b[i]->color.data(), sizeof(Lanes));
+            std::memcpy(&fromCentroid[i], &a[i]->centroidX, sizeof(Lanes));
+            std::memcpy(&toCentroid[i], &b[i]->centroidX, sizeof(Lanes));
+            std::memcpy(&border[i], &edge[i]->borderCount, sizeof(Lanes));
+        }
+        static_assert(offsetof(GraphEdge, secondaryGradient) - offsetof(GraphEdge, borderCount) == 12);
+        for (Lanes* v : {from, to, fromCentroid, toCentroid, border}) transpose(v);
         // Direction (fig. 5): the border's normal (from a to b); if the
         // border is closed or ragged (its chord is short) the centroids decide
         // instead. Across the stripes if it is within 45 degrees of the
         // primary direction (the border within 45 degrees of the stripes).
-        float nx = static_cast<float>(edge.normalX), ny = static_cast<float>(edge.normalY);
-        const float count = static_cast<float>(edge.borderCount);
-        if (nx * nx + ny * ny < 0.0625f * count * count) {  // chord < border length / 4
-            nx = b.centroidX - a.centroidX;
-            ny = b.centroidY - a.centroidY;
-        }
+        const LaneMask normal = (LaneMask)border[1];
+        Lanes nx = floatsOf(normal << 16 >> 16), ny = floatsOf(normal >> 16);  // int16 x, y
+        const Lanes count = floatsOf((LaneMask)border[0]);
+        const LaneMask ragged = nx * nx + ny * ny < 0.0625f * count * count;  // chord < border length / 4
+        nx = select(ragged, toCentroid[0] - fromCentroid[0], nx);
+        ny = select(ragged, toCentroid[1] - fromCentroid[1], ny);
         // Within 45 degrees of the primary direction: |along| / length >= cos 45.
-        const float length2 = nx * nx + ny * ny;
-        const float along = nx * ws.primary[0] + ny * ws.primary[1];
-        // Arithmetic, not branches: the direction of one edge says nothing
-        // about the next one's.
-        const bool parallel = length2 == 0 || 2 * along * along < length2;
-        const auto direction = static_cast<EdgeDirection>(!parallel * (2 * (along > 0) - 1));
-        for (int c = 0; c < 3; ++c) {
-            const float change = std::abs(b.color[c] - a.color[c]);
-            a.range[c] = std::max(a.range[c], change);
-            b.range[c] = std::max(b.range[c], change);
-        }
-        const EqualizedChange change = equalizedChange(ws, edge.a, edge.b);
-        EdgeFeature& feature = ws.edgeFeatures[e];
-        feature.weight = change.weight;
-        // Symbols and their errors are only tested across the stripes (the
+        const Lanes length2 = nx * nx + ny * ny;
+        const Lanes along = nx * ws.primary[0] + ny * ws.primary[1];
+        const LaneMask across = ~((length2 == 0) | (2.0f * along * along < length2));
+        const LaneMask direction = across & ((along <= 0) - (along > 0));  // EdgeDirection
+        const SymbolLanes symbols = bestSymbolLanes(from, to, t, scales);
+        // Symbols and their errors are only kept across the stripes (the
         // traversal's seeds, paths and links; along them it tests null
         // edges).
-        if (direction == EdgeDirection::Parallel) {
-            feature.packed = EdgeFeature::pack(edge.a, edge.b, direction, kNullSymbol);
-            feature.bestMatch = 0;
-            feature.gradientError = 0;
-            continue;
+        const Lanes primaryGradient = border[2], secondaryGradient = border[3];
+        const Lanes ratio = secondaryGradient / primaryGradient;
+        const Lanes gradientError = select(primaryGradient > 0, select(kMaxGradientError < ratio, lanesOf(kMaxGradientError), ratio),
+                                           lanesOf(kMaxGradientError));
+        const LaneMask symbol = select(across, symbols.symbol, LaneMask{} + kNullSymbol);
+        Lanes feature[4] = {(Lanes)(ends | (direction + 1) << EdgeFeature::kEndBits | symbol << (EdgeFeature::kEndBits + 2)),
+                            symbols.weight, (Lanes)(across & (LaneMask)symbols.bestMatch),
+                            (Lanes)(across & (LaneMask)gradientError)};
+        transpose(feature);
+        Lanes change[4] = {symbols.rawChange[0], symbols.rawChange[1], symbols.rawChange[2], Lanes{}};
+        transpose(change);
+        static_assert(sizeof(EdgeFeature) == sizeof(Lanes));
+        for (int i = 0; i < n; ++i) {
+            std::memcpy(static_cast<void*>(&ws.edgeFeatures[e0 + i]), &feature[i], sizeof(EdgeFeature));
+            for (int ch = 0; ch < 3; ++ch) {
+                a[i]->range[ch] = std::max(a[i]->range[ch], change[i][ch]);
+                b[i]->range[ch] = std::max(b[i]->range[ch], change[i][ch]);
+            }
         }
-        const SymbolCode bestSymbol = optimalSymbol(change.c, t);
-        feature.packed = EdgeFeature::pack(edge.a, edge.b, direction, bestSymbol);
-        feature.gradientError = edge.primaryGradient > 0
-                                    ? std::min(edge.secondaryGradient / edge.primaryGradient, kMaxGradientError)
-                                    : kMaxGradientError;
-        feature.bestMatch = symbolError(change, bestSymbol, scales);
     }
 }
 

@@ -151,8 +151,15 @@ int regionMediansDiffering(unsigned seed)
     std::mt19937 rng(seed);
     std::vector<std::uint32_t> pixels(3000 + 4);
     int differing = 0;
+    std::vector<std::uint32_t> other(255 + 4);
     auto compare = [&](int count) {
         differing += channelMedians(pixels.data(), count) != channelMediansReference(pixels.data(), count);
+        // The pair kernel, with a second region of 1-255 random pixels.
+        const int otherCount = 1 + (count * 37) % 255;
+        for (int i = 0; i < otherCount; ++i) other[i] = rng();
+        const auto both = channelMediansPair(pixels.data(), count, other.data(), otherCount);
+        differing += both[0] != channelMediansReference(pixels.data(), count);
+        differing += both[1] != channelMediansReference(other.data(), otherCount);
     };
     for (int count : {1, 2, 3, 4, 5, 63, 64, 65, 252, 255, 256, 257, 1016, 1019, 1020, 3000})
         for (int kind = 0; kind < 3; ++kind) {
@@ -731,6 +738,84 @@ TEST(DecoderKernels, EdgeSymbolErrorsMatchThePerChannelLoopsBitwise)
     EXPECT_EQ(differing, 0) << "of " << changes << " changes";
     // The common change's correction is exercised, not bypassed.
     EXPECT_GT(corrected, changes);
+}
+
+// The edge stage (edges.cpp: 4 edges per step in vector lanes) against the
+// one-edge functions the traversal calls, and the direction test of fig. 5,
+// edge by edge: every feature and range bitwise.
+TEST(DecoderKernels, EdgeStageMatchesTheOneEdgeFunctionsBitwise)
+{
+    DecoderWorkspace ws(StripePattern::generate(40, 4, 8, 7).value(), DecoderParams{});
+    constexpr int kRegions = 300, kEdges = 20003;  // not a multiple of the 4 lanes
+    ws.regions = std::make_unique<Region[]>(kRegions);
+    ws.edges = std::make_unique<GraphEdge[]>(kEdges);
+    ws.edgeFeatures = std::make_unique<EdgeFeature[]>(kEdges);
+    ws.edgeCount = kEdges;
+    ws.primary = cv::Vec2f(0.8f, -0.6f);
+    std::mt19937 random(11);
+    std::uniform_real_distribution<float> colour(-10.0f, 270.0f), position(0.0f, 780.0f), gradient(0.0f, 400.0f);
+    std::uniform_int_distribution<int> digit(0, 3), region(0, kRegions - 1), normal(-40, 40), border(1, 60);
+    for (int r = 0; r < kRegions; ++r) {
+        for (float& c : ws.regions[r].color) c = r % 3 == 0 ? static_cast<float>(64 * digit(random)) : colour(random);
+        ws.regions[r].centroidX = position(random);
+        ws.regions[r].centroidY = position(random);
+    }
+    for (int e = 0; e < kEdges; ++e) {
+        GraphEdge& edge = ws.edges[e];
+        do {
+            edge.a = region(random);
+            edge.b = region(random);
+        } while (edge.a == edge.b);
+        if (edge.a > edge.b) std::swap(edge.a, edge.b);
+        edge.borderCount = border(random);
+        edge.normalX = static_cast<std::int16_t>(e % 7 == 0 ? 0 : normal(random));
+        edge.normalY = static_cast<std::int16_t>(e % 5 == 0 ? 0 : normal(random));
+        edge.primaryGradient = e % 11 == 0 ? 0.0f : gradient(random);
+        edge.secondaryGradient = gradient(random);
+    }
+    computeEdgeFeatures(ws);
+
+    const float t = static_cast<float>(ws.params.t);
+    std::vector<std::array<float, 3>> ranges(kRegions);
+    int differing = 0, across = 0, ragged = 0;
+    for (int e = 0; e < kEdges; ++e) {
+        const GraphEdge& edge = ws.edges[e];
+        const Region &a = ws.regions[edge.a], &b = ws.regions[edge.b];
+        float nx = edge.normalX, ny = edge.normalY;
+        const float count = static_cast<float>(edge.borderCount);
+        if (nx * nx + ny * ny < 0.0625f * count * count) {
+            nx = b.centroidX - a.centroidX;
+            ny = b.centroidY - a.centroidY;
+            ++ragged;
+        }
+        const float length2 = nx * nx + ny * ny, along = nx * ws.primary[0] + ny * ws.primary[1];
+        const bool parallel = length2 == 0 || 2 * along * along < length2;
+        const auto direction = parallel ? EdgeDirection::Parallel : along > 0 ? EdgeDirection::Forward : EdgeDirection::Backward;
+        for (int c = 0; c < 3; ++c) {
+            const float change = std::abs(b.color[c] - a.color[c]);
+            ranges[edge.a][c] = std::max(ranges[edge.a][c], change);
+            ranges[edge.b][c] = std::max(ranges[edge.b][c], change);
+        }
+        const EqualizedChange change = equalizedChange(ws, edge.a, edge.b);
+        EdgeFeature expected;
+        expected.weight = change.weight;
+        expected.packed = EdgeFeature::pack(edge.a, edge.b, direction, kNullSymbol);
+        if (!parallel) {
+            const SymbolCode symbol = optimalSymbol(change.c, t);
+            expected.packed = EdgeFeature::pack(edge.a, edge.b, direction, symbol);
+            expected.bestMatch = symbolError(change, symbol, t);
+            expected.gradientError =
+                edge.primaryGradient > 0 ? std::min(edge.secondaryGradient / edge.primaryGradient, 10.0f) : 10.0f;
+            ++across;
+        }
+        differing += std::memcmp(&expected, &ws.edgeFeatures[e], sizeof expected) != 0;
+    }
+    for (int r = 0; r < kRegions; ++r) differing += std::memcmp(&ranges[r], &ws.regions[r].range, sizeof ranges[r]) != 0;
+    EXPECT_EQ(differing, 0) << "of " << kEdges << " edges and " << kRegions << " regions";
+    // Both directions and both ways to them are exercised.
+    EXPECT_GT(across, kEdges / 4);
+    EXPECT_LT(across, kEdges * 3 / 4);
+    EXPECT_GT(ragged, kEdges / 10);
 }
 
 }  // namespace
