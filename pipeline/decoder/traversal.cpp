@@ -42,9 +42,6 @@ constexpr int kContradictionRatio = 2;
 // outliers 0.198 -> 0.15 %, inliers 76.2 -> 75.0 %; docs/algorithm.md).
 constexpr int kAlongStripeWeight = 2;
 
-// Links between decoded regions across the stripes (markLinks).
-constexpr std::int32_t kNoLink = 0, kSameStripe = 1, kConfirmedLink = 2;
-
 // A null edge's error adds its border's mean gradient (per pixel pair, summed
 // over channels) relative to the reference edge's weight, times this: the
 // paper's gradient term (eq. 8) for edges that should show no change. Two
@@ -126,9 +123,9 @@ public:
             propagate();
             ++ws_.passCount;
         }
-        markLinks();
+        const int linkCount = weighEvidence();
         rejectContradictedRegions();
-        rejectShortRuns();
+        rejectShortRuns(linkCount);
         rejectSmallComponents();
     }
 
@@ -451,78 +448,92 @@ private:
         }
     }
 
-    // Per edge across the stripes between decoded regions, in edgeOrder (free
-    // after seeding): kSameStripe, kConfirmedLink (consecutive stripes in the
-    // edge's direction whose symbol fits: error < tokenErrorLimit) or kNoLink.
-    // Both checks below read them; each error is evaluated once.
-    void markLinks()
-    {
-        const float limit = static_cast<float>(ws_.params.tokenErrorLimit);
-        std::int32_t* link = ws_.edgeOrder.get();
-        for (int e = 0; e < ws_.edgeCount; ++e) {
-            const GraphEdge& edge = ws_.edges[e];
-            const EdgeDirection direction = features_[e].direction();
-            link[e] = kNoLink;
-            const int sa = stripes_[edge.a], sb = stripes_[edge.b];
-            if (sa < 0 || sb < 0 || direction == EdgeDirection::Parallel) continue;
-            const int step = direction == EdgeDirection::Forward ? 1 : -1;  // b = a + step if consecutive
-            if (sb == sa) link[e] = kSameStripe;
-            else if (sb == sa + step &&
-                     edgeError(edge.a, edge.b, features_[e], stripeSymbol(ws_.pattern, sa, sb), nullptr) < limit)
-                link[e] = kConfirmedLink;
-        }
-    }
-
+    // The evidence of the checks below, in one pass over the edges (read in
+    // order, each error evaluated once; walking the regions' incidence lists
+    // read every edge twice, at random): per decoded region, in componentSize,
+    // its contradicting border minus kContradictionRatio times its confirming
+    // border (integers: the sum does not depend on the order), and in the
+    // scratch (free after the seed sort; 2 entries per edge), for
+    // rejectShortRuns, the links between decoded regions across the stripes
+    // in edge order: pairs (left region, 2 * right region + confirmed), for
+    // the same stripe (not confirmed) or consecutive stripes in the edge's
+    // direction whose symbol fits (error < tokenErrorLimit, confirmed).
+    //
     // A region decoded across a depth discontinuity by one edge that matched
     // by chance has the pattern contradicted by its other edges across the
     // stripes: weighed by border length, those that do not fit its stripe
     // (error >= tokenErrorLimit for the expected symbol, not a weak null
     // edge, neighbour not decoded consistently), and weak edges along the
     // stripes to a region of another stripe (kAlongStripeWeight times),
-    // against those that fit. Such
-    // regions are undecoded when the contradicting border outweighs the
-    // confirming one kContradictionRatio times; a region on a true boundary
-    // keeps one confirming side, a wrongly offset one has almost none.
-    void rejectContradictedRegions()
+    // against those that fit. Such regions are undecoded when the
+    // contradicting border outweighs the confirming one kContradictionRatio
+    // times (rejectContradictedRegions); a region on a true boundary keeps one
+    // confirming side, a wrongly offset one has almost none.
+    int weighEvidence()
     {
         const StripePattern& pattern = ws_.pattern;
         const float limit = static_cast<float>(ws_.params.tokenErrorLimit);
-        const std::int32_t* link = ws_.edgeOrder.get();
-        std::int32_t* reject = ws_.componentSize.get();  // flags, before the component sizes are counted
-        for (int v = 0; v < ws_.regionCount; ++v) {
-            reject[v] = 0;
-            const int stripe = stripes_[v];
-            if (stripe < 0) continue;
-            const Region& r = ws_.regions[v];
-            int support = 0, contradiction = 0;
-            const float weakEdge = static_cast<float>(ws_.params.nullEdgeRatio) * maxChannelRange(r);
-            for (int i = 0; i < r.degree; ++i) {
-                const int edgeIndex = ws_.adjacency[r.adjacencyBegin + i];
-                const EdgeFeature& edge = features_[edgeIndex];
-                const int w = edge.otherEnd(v);
-                const EdgeDirection dir = directionFrom(edge, v, w);
-                const int neighbour = stripes_[w];
-                if (dir == EdgeDirection::Parallel) {
-                    // Along the stripes the stripe stays: a weak edge to a
-                    // region decoded as another stripe contradicts one of them.
-                    if (neighbour >= 0 && neighbour != stripe && edge.weight < weakEdge)
-                        contradiction += kAlongStripeWeight * ws_.edges[edgeIndex].borderCount;
-                    continue;
+        const float nullEdgeRatio = static_cast<float>(ws_.params.nullEdgeRatio);
+        // The edge is weak for region v (as weak as a null edge): read only
+        // where it decides, the region records being 64 bytes each.
+        auto weakEdge = [&](int v) { return nullEdgeRatio * maxChannelRange(ws_.regions[v]); };
+        std::int32_t* score = ws_.componentSize.get();
+        std::fill(score, score + ws_.regionCount, 0);
+        std::int32_t* pairs = ws_.scratch.get();
+        int linkCount = 0;
+        for (int e = 0; e < ws_.edgeCount; ++e) {
+            const GraphEdge& edge = ws_.edges[e];
+            const int sa = stripes_[edge.a], sb = stripes_[edge.b];
+            if ((sa & sb) < 0) continue;  // neither end decoded
+            const EdgeFeature& feature = features_[e];
+            const EdgeDirection direction = feature.direction();
+            const int border = edge.borderCount;
+            if (direction == EdgeDirection::Parallel) {
+                // Along the stripes the stripe stays: a weak edge to a region
+                // decoded as another stripe contradicts one of them.
+                if (sa >= 0 && sb >= 0 && sa != sb) {
+                    if (feature.weight < weakEdge(edge.a)) score[edge.a] += kAlongStripeWeight * border;
+                    if (feature.weight < weakEdge(edge.b)) score[edge.b] += kAlongStripeWeight * border;
                 }
-                const int expected = stripe + (dir == EdgeDirection::Forward ? 1 : -1);
-                if (neighbour == stripe) continue;  // a null edge within the stripe
-                bool fits = false;
-                if (neighbour == expected) fits = link[edgeIndex] == kConfirmedLink;
-                else if (neighbour < 0 && expected >= 0 && expected < pattern.stripeCount())
-                    fits = edgeError(v, w, edge, stripeSymbol(pattern, stripe, expected), nullptr) < limit;
-                if (fits) support += ws_.edges[edgeIndex].borderCount;
-                else if (neighbour >= 0 || edge.weight >= weakEdge)
-                    contradiction += ws_.edges[edgeIndex].borderCount;
+                continue;
             }
-            reject[v] = contradiction > kContradictionRatio * support;
+            const int step = static_cast<int>(direction);  // b = a + step if consecutive
+            if (sa >= 0 && sb >= 0) {
+                if (sa == sb) {  // a null edge within the stripe
+                    pairs[2 * linkCount] = step > 0 ? edge.a : edge.b;
+                    pairs[2 * linkCount + 1] = 2 * (step > 0 ? edge.b : edge.a);
+                    ++linkCount;
+                } else if (sb == sa + step &&
+                           edgeError(edge.a, edge.b, feature, stripeSymbol(pattern, sa, sb), nullptr) < limit) {
+                    pairs[2 * linkCount] = step > 0 ? edge.a : edge.b;
+                    pairs[2 * linkCount + 1] = 2 * (step > 0 ? edge.b : edge.a) + 1;
+                    ++linkCount;
+                    score[edge.a] -= kContradictionRatio * border;
+                    score[edge.b] -= kContradictionRatio * border;
+                } else {
+                    score[edge.a] += border;
+                    score[edge.b] += border;
+                }
+                continue;
+            }
+            // One end decoded: does the edge show the symbol to the next stripe?
+            const bool fromA = sa >= 0;
+            const int v = fromA ? edge.a : edge.b, w = fromA ? edge.b : edge.a;
+            const int stripe = fromA ? sa : sb, expected = stripe + (fromA ? step : -step);
+            if (expected >= 0 && expected < pattern.stripeCount() &&
+                edgeError(v, w, feature, stripeSymbol(pattern, stripe, expected), nullptr) < limit)
+                score[v] -= kContradictionRatio * border;
+            else if (feature.weight >= weakEdge(v))
+                score[v] += border;
         }
+        return linkCount;
+    }
+
+    void rejectContradictedRegions()
+    {
+        const std::int32_t* score = ws_.componentSize.get();
         for (int v = 0; v < ws_.regionCount; ++v)
-            if (reject[v]) undecode(v);
+            if (stripes_[v] >= 0 && score[v] > 0) undecode(v);
     }
 
     // The window property, region by region: a region keeps its stripe only
@@ -537,7 +548,7 @@ private:
     // edge on each side (a slat's shadow on the wall next to a lit stripe
     // otherwise decodes as the pattern's next black stripe and spreads
     // through the shadow over null edges).
-    void rejectShortRuns()
+    void rejectShortRuns(int listed)
     {
         const StripePattern& pattern = ws_.pattern;
         const int window = pattern.window();
@@ -545,26 +556,16 @@ private:
         for (int v = 0; v < ws_.regionCount; ++v) runs[v] = 0;
         auto left = [&](int v) { return runs[v] & 0xffff; };
         auto right = [&](int v) { return runs[v] >> 16; };
-        // The links that remain (regions undecoded since markLinks() have
-        // none), in edge order, as pairs (left region, 2 * right region +
-        // confirmed) in the scratch (free after the graph stage; it holds 2
-        // entries per edge): the sweeps visit only them, in the same order,
-        // without reading the edges again.
-        const std::int32_t* link = ws_.edgeOrder.get();
+        // The links weighEvidence() listed, less those of regions undecoded
+        // since (in place, in edge order, without a branch: which remain is
+        // data): the sweeps visit only them, without reading the edges again.
         std::int32_t* pairs = ws_.scratch.get();
         int linkCount = 0;
-        // Without a branch (which edges link is data): every edge's pair is
-        // written, the count advances by the test.
-        for (int e = 0; e < ws_.edgeCount; ++e) {
-            const GraphEdge& edge = ws_.edges[e];
-            // lo = the region on the left (lower stripe side), hi = on the
-            // right: a if the edge is forward, else b, by masks (GCC branched
-            // on the ?:).
-            const int aLeft = -static_cast<int>(features_[e].direction() == EdgeDirection::Forward);
-            const int lo = edge.b ^ ((edge.a ^ edge.b) & aLeft), hi = edge.a ^ edge.b ^ lo;
+        for (int i = 0; i < listed; ++i) {
+            const int lo = pairs[2 * i], hi = pairs[2 * i + 1];
             pairs[2 * linkCount] = lo;
-            pairs[2 * linkCount + 1] = 2 * hi + (link[e] == kConfirmedLink);
-            linkCount += (link[e] != kNoLink) & (stripes_[edge.a] >= 0) & (stripes_[edge.b] >= 0);
+            pairs[2 * linkCount + 1] = hi;
+            linkCount += (stripes_[lo] >= 0) & (stripes_[hi >> 1] >= 0);
         }
         // The sweeps keep their branches: late sweeps change few runs, and
         // the fan, which sweeps to the limit, took 3 M instructions more
