@@ -112,19 +112,35 @@ void computeRegions(DecoderWorkspace& ws)
         if (whole < end) std::memcpy(out, pixel, 3);
     });
 
-    // channelMedians reads up to 4 pixels past a region's last: the last
-    // regions take the reference.
+    // Regions of up to 255 pixels in pairs (channelMediansPair overlaps
+    // their searches), each as it comes with the one before it left over;
+    // larger ones alone. channelMedians reads up to 4 pixels past a region's
+    // last: the last regions take the reference.
     const std::ptrdiff_t n = static_cast<std::ptrdiff_t>(w) * h;
     const cv::Matx33f& m = ws.colorCorrection;
-    for (int r = 0; r < count; ++r) {
-        const int size = regions[r].pixelCount;
-        const std::int32_t first = counter[r] - size;
-        const std::array<std::uint8_t, 3> byByte = first + size + 4 <= n ? channelMedians(sorted + first, size)
-                                                                          : channelMediansReference(sorted + first, size);
+    auto setColor = [&](int r, const std::array<std::uint8_t, 3>& byByte) {
         const cv::Vec3f median(byByte[ws.rgbOffset[0]], byByte[ws.rgbOffset[1]], byByte[ws.rgbOffset[2]]);
         const cv::Vec3f corrected = m * median;
         regions[r].color = {corrected[0], corrected[1], corrected[2]};
+    };
+    auto pixelsOf = [&](int r) { return sorted + counter[r] - regions[r].pixelCount; };
+    int waiting = -1;  // a region of up to 255 pixels without a pair yet
+    for (int r = 0; r < count; ++r) {
+        const int size = regions[r].pixelCount;
+        if (counter[r] + 4 > n) {
+            setColor(r, channelMediansReference(pixelsOf(r), size));
+        } else if (size > 255) {
+            setColor(r, channelMedians(pixelsOf(r), size));
+        } else if (waiting < 0) {
+            waiting = r;
+        } else {
+            const auto both = channelMediansPair(pixelsOf(waiting), regions[waiting].pixelCount, pixelsOf(r), size);
+            setColor(waiting, both[0]);
+            setColor(r, both[1]);
+            waiting = -1;
+        }
     }
+    if (waiting >= 0) setColor(waiting, channelMedians(pixelsOf(waiting), regions[waiting].pixelCount));
 }
 
 }  // namespace stria::pipeline

@@ -78,6 +78,9 @@ void projectedGradientWindows(const std::uint8_t* row, int width, const std::int
 // must be readable.
 std::array<std::uint8_t, 3> channelMediansReference(const std::uint32_t* pixels, int count);
 std::array<std::uint8_t, 3> channelMedians(const std::uint32_t* pixels, int count);
+// The same for two regions at once, faster where both have up to 255 pixels.
+std::array<std::array<std::uint8_t, 3>, 2> channelMediansPair(const std::uint32_t* a, int countA,
+                                                              const std::uint32_t* b, int countB);
 
 // Region statistics and graph (regions.cpp, graph.cpp). Bit i of the result
 // is set where a[i] != b[i], for i < count <= 64: with b = a + 1 the borders
