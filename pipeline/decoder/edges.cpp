@@ -26,6 +26,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
+#include <limits>
 
 #if defined(__SSE2__)
 #include <emmintrin.h>
@@ -204,12 +205,14 @@ void transpose(Lanes v[4])  // rows to columns: v[j][i] = v[i][j] before
 
 Lanes lanesOf(float v) { return Lanes{} + v; }
 Lanes floatsOf(LaneMask v) { return __builtin_convertvector(v, Lanes); }
+// a < b ? a : b and a > b ? a : b per lane, which GCC compiles to SSE2's
+// minps and maxps (3 instructions fewer than a select by masks).
+Lanes lesserOf(Lanes a, Lanes b) { return a < b ? a : b; }
+Lanes greaterOf(Lanes a, Lanes b) { return a > b ? a : b; }
 // std::max({x, y, z}) per lane: the first of the largest.
-Lanes largestOf(Lanes x, Lanes y, Lanes z)
-{
-    const Lanes m = select(x < y, y, x);
-    return select(m < z, z, m);
-}
+Lanes largestOf(Lanes x, Lanes y, Lanes z) { return greaterOf(z, greaterOf(y, x)); }
+// x where mask, else +0: one and, where a select takes three.
+Lanes where(LaneMask mask, Lanes x) { return (Lanes)(mask & (LaneMask)x); }
 Lanes squareRoot(Lanes v)
 {
 #if defined(__SSE2__)
@@ -243,28 +246,30 @@ SymbolLanes bestSymbolLanes(const Lanes from[3], const Lanes to[3], float t, con
     out.weight = largestOf(out.rawChange[0], out.rawChange[1], out.rawChange[2]);
     const Lanes relative = largestOf(absolute(c[0]), absolute(c[1]), absolute(c[2]));
     for (Lanes& v : c) v = select(relative > 0, v / relative, v);
-    // The optimal symbol's signs: (c >= t) - (c <= -t), from masks of -1.
+    // The optimal symbol's signs, (c >= t) - (c <= -t), and the channels
+    // falling, constant and rising from those masks (-1 where true).
     LaneMask sign[3], count[3] = {};  // count: falling, constant, rising
     Lanes group[3] = {};              // the channel sums of each group
     for (int ch = 0; ch < 3; ++ch) {
-        sign[ch] = (c[ch] <= -t) - (c[ch] >= t);
-        const LaneMask member[3] = {sign[ch] < 0, sign[ch] == 0, sign[ch] > 0};
+        const LaneMask falling = c[ch] <= -t, rising = c[ch] >= t;
+        sign[ch] = falling - rising;
+        const LaneMask member[3] = {falling, ~(falling | rising), rising};
         for (int g = 0; g < 3; ++g) {
-            group[g] += select(member[g], c[ch], Lanes{});
+            group[g] += where(member[g], c[ch]);
             count[g] -= member[g];
         }
     }
-    out.symbol = (sign[0] + 1) * 9 + (sign[1] + 1) * 3 + (sign[2] + 1);
+    out.symbol = kNullSymbol + 9 * sign[0] + 3 * sign[1] + sign[2];  // makeSymbol
     // symbolError of that symbol: its terms (kSymbolTerms) from the counts.
-    auto scaleOf = [](LaneMask n) { return select(n == 2, lanesOf(0.5f), lanesOf(1.0f)); };
-    auto flag = [](LaneMask m) { return select(m, lanesOf(1.0f), Lanes{}); };
+    auto scaleOf = [](LaneMask n) { return 1.0f - where(n == 2, lanesOf(0.5f)); };  // exact: 1 or 0.5
+    auto flag = [](LaneMask m) { return where(m, lanesOf(1.0f)); };
     const Lanes viaMidpoint = 0.5f * (group[0] * scaleOf(count[0]) + group[2] * scaleOf(count[2]));
     const Lanes viaConstant = select(count[1] == 3, group[1] / 3.0f, group[1] * scaleOf(count[1]));
     Lanes common = viaConstant * flag(count[1] > 0) + viaMidpoint * flag((count[1] == 0) & (count[0] > 0) & (count[2] > 0));
-    const Lanes share = kMaxAlbedoChange / relative;
-    const Lanes bound = select(relative > 0, select(share < kMaxCommonShare, share, lanesOf(kMaxCommonShare)), Lanes{});
-    common = select(bound < common, bound, common);
-    common = select(common < -bound, -bound, common);
+    // minOf(kMaxCommonShare, share) where relative > 0, then the clamp as
+    // minOf and maxOf in symbolError's operand order.
+    const Lanes bound = where(relative > 0, lesserOf(kMaxAlbedoChange / relative, lanesOf(kMaxCommonShare)));
+    common = greaterOf(-bound, lesserOf(bound, common));
     Lanes corrected[3];
     for (int ch = 0; ch < 3; ++ch) corrected[ch] = c[ch] - common;
     const Lanes norm = largestOf(absolute(corrected[0]), absolute(corrected[1]), absolute(corrected[2]));
@@ -341,14 +346,20 @@ void computeEdgeFeatures(DecoderWorkspace& ws)
                             symbols.weight, (Lanes)(across & (LaneMask)symbols.bestMatch),
                             (Lanes)(across & (LaneMask)gradientError)};
         transpose(feature);
-        Lanes change[4] = {symbols.rawChange[0], symbols.rawChange[1], symbols.rawChange[2], Lanes{}};
+        Lanes change[4] = {symbols.rawChange[0], symbols.rawChange[1], symbols.rawChange[2],
+                           lanesOf(-std::numeric_limits<float>::infinity())};
         transpose(change);
-        static_assert(sizeof(EdgeFeature) == sizeof(Lanes));
+        static_assert(sizeof(EdgeFeature) == sizeof(Lanes) && offsetof(Region, centroidX) == offsetof(Region, range) + 12);
         for (int i = 0; i < n; ++i) {
             std::memcpy(static_cast<void*>(&ws.edgeFeatures[e0 + i]), &feature[i], sizeof(EdgeFeature));
-            for (int ch = 0; ch < 3; ++ch) {
-                a[i]->range[ch] = std::max(a[i]->range[ch], change[i][ch]);
-                b[i]->range[ch] = std::max(b[i]->range[ch], change[i][ch]);
+            // std::max(range, change) per channel, on the 16 bytes from
+            // range[0]: the fourth lane is centroidX, which the maximum with
+            // -infinity leaves as it is.
+            for (Region* r : {a[i], b[i]}) {
+                Lanes range;
+                std::memcpy(&range, r->range.data(), sizeof range);
+                range = greaterOf(change[i], range);
+                std::memcpy(r->range.data(), &range, sizeof range);
             }
         }
     }
