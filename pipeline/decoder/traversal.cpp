@@ -25,7 +25,6 @@
 #include <array>
 #include <bit>
 #include <cstdint>
-#include <optional>
 #include <utility>
 
 namespace stria::pipeline {
@@ -218,35 +217,46 @@ private:
             bool bestLeft = false;
             SymbolCode bestSymbol = kNullSymbol;
             for (bool left : {true, false}) {
+                // The symbols the candidates need at this end, each once, in
+                // the candidates' order (a repeated symbol gives the same
+                // error, which cannot be lower than the first time): the same
+                // for every edge at this end.
+                std::array<SymbolCode, kSymbolCount> needed;
+                int neededCount = 0;
+                std::uint32_t seen = 0;
+                for (int c = 0; c < count; ++c) {
+                    const int stripeHere = ws_.candidates[c] + (left ? 0 : end - begin - 1);
+                    const int stripeNext = stripeHere + (left ? -1 : 1);
+                    if (stripeNext < 0 || stripeNext >= pattern.stripeCount()) continue;
+                    const SymbolCode symbol = stripeSymbol(pattern, stripeHere, stripeNext);
+                    needed[neededCount] = symbol;
+                    neededCount += !(seen >> symbol & 1);
+                    seen |= 1u << symbol;
+                }
                 const int endRegion = left ? path[begin] : path[end - 1];
                 const Region& r = ws_.regions[endRegion];
-                for (int i = 0; i < r.degree; ++i) {
+                for (int i = 0; i < r.degree && neededCount > 0; ++i) {
                     const EdgeFeature& edge = features_[ws_.adjacency[r.adjacencyBegin + i]];
                     const int next = edge.otherEnd(endRegion);
                     if (directionFrom(edge, endRegion, next) != (left ? EdgeDirection::Backward : EdgeDirection::Forward))
                         continue;
                     if (stripes_[next] >= 0 || std::find(path + begin, path + end, next) != path + end)
                         continue;
-                    // The change is computed for the first symbol other than
-                    // the optimal one (whose error the edge stage left).
+                    // The optimal symbol's error the edge stage left; the
+                    // others' errors all evaluated before any is compared, so
+                    // that their chains of divisions overlap.
                     const SymbolCode best = bestSymbolFrom(edge, endRegion, next);
-                    std::optional<EqualizedChange> change;
-                    SymbolCode tried = kNullSymbol;  // each required symbol once per edge
-                    for (int c = 0; c < count; ++c) {
-                        const int stripeHere = ws_.candidates[c] + (left ? 0 : end - begin - 1);
-                        const int stripeNext = stripeHere + (left ? -1 : 1);
-                        if (stripeNext < 0 || stripeNext >= pattern.stripeCount()) continue;
-                        const SymbolCode needed = stripeSymbol(pattern, stripeHere, stripeNext);
-                        if (needed == tried) continue;
-                        tried = needed;
-                        if (needed != best && !change) change = equalizedChange(ws_, endRegion, next);
-                        const float error = (needed == best ? edge.bestMatch : symbolError(*change, needed, scales_)) +
-                                            alpha_ * edge.gradientError;
-                        if (error < bestError) {
-                            bestError = error;
+                    const EqualizedChange change = equalizedChange(ws_, endRegion, next);
+                    std::array<float, kSymbolCount> errors;
+                    for (int k = 0; k < neededCount; ++k)
+                        errors[k] = (needed[k] == best ? edge.bestMatch : symbolError(change, needed[k], scales_)) +
+                                    alpha_ * edge.gradientError;
+                    for (int k = 0; k < neededCount; ++k) {
+                        if (errors[k] < bestError) {
+                            bestError = errors[k];
                             bestRegion = next;
                             bestLeft = left;
-                            bestSymbol = needed;
+                            bestSymbol = needed[k];
                         }
                     }
                 }
