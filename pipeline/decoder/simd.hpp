@@ -39,10 +39,14 @@ void descentRow(const std::uint8_t* up, const std::uint8_t* row, const std::uint
                 std::uint8_t* code);
 // Code bit set on arrows the plateau pass added (code kPlateauArrow | direction).
 inline constexpr std::uint8_t kPlateauArrow = 4;
+// Code bit set on the pixels of regional minima (code kMinimumArrow | an
+// arrow up or left to a pixel of the same minimum, or | kDescentFlat on the
+// minimum's first pixel in each of its rows' runs that has none).
+inline constexpr std::uint8_t kMinimumArrow = 16;
 // The label of a pixel whose basin is not known yet (and beyond the row's ends).
 inline constexpr std::int32_t kUnresolved = std::numeric_limits<std::int32_t>::min();
-// The watershed's row sweeps: each pixel of the row with an arrow up (plateau
-// or not) takes the label above it, then, from the left, each pixel with an
+// The watershed's row sweeps: each pixel of the row with an arrow up (bits
+// kPlateauArrow and kMinimumArrow ignored) takes the label above it, then, from the left, each pixel with an
 // arrow left takes its left neighbour's label as it is by then, then, from
 // the right, each pixel with an arrow right its right neighbour's. Beyond the
 // row's ends the label is kUnresolved. above: width labels (in row 0, which

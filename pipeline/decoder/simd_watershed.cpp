@@ -76,9 +76,10 @@ void descentRow(const std::uint8_t* up, const std::uint8_t* row, const std::uint
 
 namespace {
 
-// Whether the code's arrow (plateau or not) points in the direction: bit 2
-// (kPlateauArrow) ignored, bit 3 (kDescentFlat) kept.
-constexpr std::uint8_t kArrowBits = 0xff & ~kPlateauArrow;
+// Whether the code's arrow (plateau, minimum or not) points in the
+// direction: bits kPlateauArrow and kMinimumArrow ignored, bit 3
+// (kDescentFlat) kept.
+constexpr std::uint8_t kArrowBits = 0xff & ~kPlateauArrow & ~kMinimumArrow;
 
 // Four labels or lane masks, in GCC's vector extensions: one source for the
 // SSE2 and NEON instructions (shuffles, compares, and/or).

@@ -21,10 +21,11 @@
 // level (cache misses, IPC about 0.5); here every pass reads rows in order
 // and every arrow leads to a neighbour. Branches on data mispredict (flat
 // pixels and runs of arrows come in runs of every length), so the passes
-// avoid them: a row's flat columns are picked 8 pixels at a time, the
-// minima take their labels and the arrows along a row theirs by a prefix
-// scan of 4 labels per step (sweepRowUpLeft, sweepRow), unions and new
-// minima come from bit masks, and only paths leading down are walked.
+// avoid them: the minima take their labels and the arrows along a row
+// theirs by a prefix scan of 4 labels per step (sweepRowUpLeft, sweepRow),
+// unions and new minima come from bit masks, the minima's pixels keep arrows
+// to their first pixels (so only those take their basin one by one, picked 8
+// pixels at a time), and only paths leading down are walked.
 #include "pipeline/decoder/workspace.hpp"
 
 #include "pipeline/decoder/simd.hpp"
@@ -71,12 +72,11 @@ constexpr SetBits kSetBits = [] {
     return bits;
 }();
 
-// The columns x of the flat pixels (code kDescentFlat, the only code with
-// bit 3) of a row, in increasing order; returns their count. Eight pixels
-// per step without a branch per pixel (flat pixels come in runs of every
-// length; a branch on each mispredicted at the runs' ends): their bits 3
-// gathered into a byte by one multiplication, its set bits' positions
-// stored from a table. Writes up to 8 entries past the count.
+// The columns x of a row's codes with bit 3 (kDescentFlat), in increasing
+// order; returns their count. Eight pixels per step without a branch per
+// pixel (a branch on each mispredicted): their bits 3 gathered into a byte by
+// one multiplication, its set bits' positions stored from a table. Writes up
+// to 8 entries past the count.
 int flatColumns(const std::uint8_t* code, int width, std::int32_t* __restrict columns)
 {
     static_assert(std::endian::native == std::endian::little, "byte k of the word is pixel k");
@@ -91,7 +91,7 @@ int flatColumns(const std::uint8_t* code, int width, std::int32_t* __restrict co
     }
     for (; x < width; ++x) {
         columns[count] = x;
-        count += code[x] == kDescentFlat;
+        count += code[x] >> 3 & 1;
     }
     return count;
 }
@@ -117,8 +117,8 @@ std::int32_t findBasin(std::int32_t* parent, std::int32_t b)
 
 std::size_t watershedScratchEntries(int width, int height)
 {
-    // The codes and the wall, then the flat columns of a row (and 8 more),
-    // then 64 labels kUnresolved.
+    // The codes and the wall, then the first pixels' columns of a row (and 8
+    // more), then 64 labels kUnresolved.
     return codeEntries(static_cast<std::size_t>(width) * height, width) + width + 8 + 64;
 }
 
@@ -128,7 +128,7 @@ void computeWatershed(DecoderWorkspace& ws)
     const std::uint8_t* g = ws.gradient.get();
     std::int32_t* label = ws.labels.get();
     // Scratch: the codes, a row of 255 (the wall beyond the image border),
-    // the flat columns of one row (or its minima's codes, bytes) and 64
+    // a row's minima codes (bytes), later its first pixels' columns, and 64
     // unresolved labels to compare with.
     auto* code = reinterpret_cast<std::uint8_t*>(ws.scratch.get());
     std::uint8_t* wall = code + n;
@@ -193,7 +193,10 @@ void computeWatershed(DecoderWorkspace& ws)
     // candidates for a union), else kDescentFlat: those start a minimum (a
     // provisional label, in raster order); other pixels get kNotMinimum.
     // sweepRowUpLeft copies the labels; where a candidate's left and upper
-    // labels then differ, their minima join.
+    // labels then differ, their minima join. Each flat pixel's code becomes
+    // kMinimumArrow | its minimum code: arrows up and left that step 4's
+    // sweeps follow from each run's first pixel (kDescentFlat, the only code
+    // with bit 3), so that only those take their basin by the union-find.
     std::fill(label, label + n, kUnresolved);
     std::int32_t* parent = ws.pixelOrder;
     auto* minimumCode = reinterpret_cast<std::uint8_t*>(columns);
@@ -213,16 +216,17 @@ void computeWatershed(DecoderWorkspace& ws)
     // became branches).
     auto mask = [](bool condition) { return static_cast<std::uint8_t>(-static_cast<int>(condition)); };
     for (int y = 0; y < h; ++y) {
-        const std::uint8_t* rowCode = code + y * w;
+        std::uint8_t* rowCode = code + y * w;
         std::int32_t* row = label + y * w;
-        // Row 0: the wall above (never flat); the labels read there unused.
+        // Row 0: the wall above (never a minimum); the labels read there unused.
         const std::uint8_t* codeAbove = y > 0 ? rowCode - w : wall;
         const std::int32_t* labelAbove = y > 0 ? row - w : row;
+        auto minimumAbove = [&](int x) { return (codeAbove[x] & 0xf0) == kMinimumArrow; };  // not the wall
         minimumCode[0] = rowCode[0] != kDescentFlat ? kNotMinimum
-                         : codeAbove[0] == kDescentFlat ? kDescentUp
-                                                        : kDescentFlat;
+                         : minimumAbove(0)          ? kDescentUp
+                                                    : kDescentFlat;
         for (int x = 1; x < w; ++x) {
-            const std::uint8_t flat = mask(rowCode[x] == kDescentFlat), up = mask(codeAbove[x] == kDescentFlat),
+            const std::uint8_t flat = mask(rowCode[x] == kDescentFlat), up = mask(minimumAbove(x)),
                                left = mask(rowCode[x - 1] == kDescentFlat);
             const std::uint8_t continued = (left & (kDescentLeft | (up & kPlateauArrow))) | (~left & ~up & kDescentFlat);
             minimumCode[x] = (flat & continued) | (~flat & kNotMinimum);
@@ -266,6 +270,10 @@ void computeWatershed(DecoderWorkspace& ws)
                 }
             }
         }
+        for (int x = 0; x < w; ++x) {
+            const std::uint8_t minimum = mask(minimumCode[x] != kNotMinimum);
+            rowCode[x] = (minimum & (kMinimumArrow | minimumCode[x])) | (~minimum & rowCode[x]);
+        }
     }
 
     // Basin numbers in raster order of each minimum's first pixel. Over
@@ -290,32 +298,31 @@ void computeWatershed(DecoderWorkspace& ws)
         const bool kept = level < threshold || (level == threshold && atThreshold-- > 0);
         parent[l] = kept ? keptCount++ : ws.maxRegions + excessCount++;
     }
-    for (int y = 0; y < h; ++y) {
-        const int count = flatColumns(code + y * w, w, columns);
-        std::int32_t* row = label + y * w;
-        for (int i = 0; i < count; ++i) {
-            const int x = columns[i];
-            row[x] = parent[~row[x]];
-        }
-    }
 
-    // 4. Every other pixel takes the basin at the end of its arrows, row by
-    // row from the top (the row above is labelled): a sweep to the right
-    // copies the labels along arrows up and left, one to the left those
-    // along arrows right (a run of arrows ends at a pixel with an arrow up,
-    // a minimum or an arrow down, never at one against it), without a branch
-    // (sweepRow). What remains leads down: those pixels, found 64 at a time
-    // by a compare mask, walk to a labelled pixel and label the path on the
-    // way back.
+    // 4. Every pixel takes the basin at the end of its arrows, row by row
+    // from the top (the row above is labelled): the minima's first pixels
+    // theirs from the union-find, then a sweep to the right copies the
+    // labels along arrows up and left, one to the left those along arrows
+    // right (a run of arrows ends at a pixel with an arrow up, a minimum's
+    // first pixel or an arrow down, never at one against it), without a
+    // branch (sweepRow). What remains leads down: those pixels, found 64 at a
+    // time by a compare mask, walk to a labelled pixel and label the path on
+    // the way back. A walk ends at a path labelled before or at a minimum's
+    // pixel in a row below, which still holds its provisional label.
     for (int y = 0; y < h; ++y) {
         const std::uint8_t* rowCode = code + y * w;
         std::int32_t* row = label + y * w;
+        const int firstPixels = flatColumns(rowCode, w, columns);
+        for (int i = 0; i < firstPixels; ++i) row[columns[i]] = parent[~row[columns[i]]];
         sweepRow(rowCode, y > 0 ? row - w : row, row, w);  // no arrow up in row 0
         for (int x0 = 0; x0 < w; x0 += 64) {
             const int count = std::min(64, w - x0);
             std::uint64_t bits = ~borderMask(row + x0, unresolvedRow, count) & (~0ull >> (64 - count));
             auto labelPath = [&](int p, int q) {
-                const std::int32_t basin = label[q];
+                // Without a branch (it mispredicted): parent[0] read in vain
+                // if the end's label is final.
+                const std::int32_t end = label[q], provisional = end >> 31;  // -1 if ~(a provisional label)
+                const std::int32_t basin = end ^ ((end ^ parent[~end & provisional]) & provisional);
                 for (int r = p; r != q; r += step[code[r] & 3]) label[r] = basin;
             };
             // Two walks at a time: each step waits on the previous one's

@@ -361,7 +361,8 @@ TEST(DecoderKernels, DescentRowMatchesReferenceOnRandomRowsOfEveryWidth)
 
 TEST(DecoderKernels, SweepRowsMatchReferencesOnRandomRowsOfEveryWidth)
 {
-    // Every code (arrows 0-3, plateau arrows 4-7, flat 8), mostly arrows left
+    // Every code (arrows 0-3, plateau arrows 4-7, flat 8; a quarter with
+    // kMinimumArrow, which the sweeps ignore as kPlateauArrow), mostly arrows left
     // and right (long runs across the 4-label blocks), some labels unresolved.
     std::mt19937 rng(23);
     int differing = 0, rows = 0;
@@ -373,6 +374,7 @@ TEST(DecoderKernels, SweepRowsMatchReferencesOnRandomRowsOfEveryWidth)
                 const unsigned r = rng() % 16;
                 code[x] = static_cast<std::uint8_t>(r < 5 ? kDescentLeft : r < 10 ? kDescentRight : r - 10 + (r == 15) * 2);
                 code[x] |= static_cast<std::uint8_t>(code[x] < kDescentFlat && rng() % 4 == 0 ? kPlateauArrow : 0);
+                code[x] |= static_cast<std::uint8_t>(rng() % 4 == 0 ? kMinimumArrow : 0);
                 above[x] = rng() % 8 == 0 ? kUnresolved : static_cast<std::int32_t>(rng() % 1000);
                 fast[x] = reference[x] = rng() % 8 == 0 ? kUnresolved : static_cast<std::int32_t>(rng() % 1000);
             }
