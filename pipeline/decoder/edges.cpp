@@ -67,15 +67,15 @@ using Lanes = float __attribute__((vector_size(16)));
 using LaneMask = std::int32_t __attribute__((vector_size(16)));
 
 Lanes lanesOf(const std::array<float, 3>& c) { return Lanes{c[0], c[1], c[2], 0}; }
+Lanes lanesOf(float v) { return Lanes{v, v, v, v}; }
 LaneMask select(LaneMask mask, LaneMask a, LaneMask b) { return (mask & a) | (~mask & b); }
 Lanes select(LaneMask mask, Lanes a, Lanes b) { return (Lanes)select(mask, (LaneMask)a, (LaneMask)b); }
 Lanes absolute(Lanes v) { return (Lanes)((LaneMask)v & 0x7fffffff); }
 float largestOfChannels(Lanes v) { return std::max({v[0], v[1], v[2]}); }
-// std::min and std::max of two floats as vector selects: GCC compiles the
-// scalar forms to branches, and whether symbolError clamps a common change
-// is data.
-float minOf(float a, float b) { return select(Lanes{b} < Lanes{a}, Lanes{b}, Lanes{a})[0]; }
-float maxOf(float a, float b) { return select(Lanes{a} < Lanes{b}, Lanes{b}, Lanes{a})[0]; }
+// a < b ? a : b and a > b ? a : b per lane, which GCC compiles to SSE2's
+// minps and maxps (3 instructions fewer than a select by masks).
+Lanes lesserOf(Lanes a, Lanes b) { return a < b ? a : b; }
+Lanes greaterOf(Lanes a, Lanes b) { return a > b ? a : b; }
 
 // Per symbol code, what symbolError needs of its channels.
 struct SymbolTerms {
@@ -128,7 +128,7 @@ EqualizedChange equalizedChange(const DecoderWorkspace& ws, int from, int to)
     const Lanes f = lanesOf(ws.regions[from].color), t = lanesOf(ws.regions[to].color);
     const Lanes raw = t - f;
     const Lanes half = 0.5f * (f + t);
-    Lanes c = raw / select(half < kMinBrightness, Lanes{} + kMinBrightness, half);
+    Lanes c = raw / select(half < kMinBrightness, lanesOf(kMinBrightness), half);
     const float norm = largestOfChannels(absolute(c));
     if (norm > 0) c /= norm;
     return {{c[0], c[1], c[2]}, largestOfChannels(absolute(raw)), norm};
@@ -156,21 +156,26 @@ float symbolError(const EqualizedChange& change, SymbolCode symbol, const MatchS
     // group, which leaves them unchanged; a count of 2 halves exactly, so it
     // multiplies (a count of 3 is the null symbol, which no stripe edge has).
     Lanes groups{};
-    for (int ch = 0; ch < 3; ++ch) groups += select(terms.group[ch], Lanes{} + c[ch], Lanes{});
+    for (int ch = 0; ch < 3; ++ch) groups += select(terms.group[ch], lanesOf(c[ch]), Lanes{});
     const float falling = groups[0], constant = groups[1], rising = groups[2];
     const float viaMidpoint = 0.5f * (falling * terms.fallingScale + rising * terms.risingScale);
     const float viaConstant = symbol == kNullSymbol ? constant / 3 : constant * terms.constantScale;
     // x * 1 + y * 0 is x (up to the sign of a zero, which nothing below tells apart).
-    float common = viaConstant * terms.viaConstant + viaMidpoint * terms.viaMidpoint;
-    // Held within +-bound: std::clamp(common, -bound, bound) (bound >= 0).
-    const float bound = change.relative > 0 ? minOf(kMaxCommonShare, kMaxAlbedoChange / change.relative) : 0.0f;
-    common = maxOf(minOf(common, bound), -bound);
+    const float unclamped = viaConstant * terms.viaConstant + viaMidpoint * terms.viaMidpoint;
+    // Held within +-bound: std::clamp(common, -bound, bound) (bound >= 0),
+    // as std::min(kMaxCommonShare, share), std::min(common, bound) and
+    // std::max(.., -bound) in every lane (minps and maxps: GCC compiles the
+    // scalar forms to branches, and whether a common change is clamped is
+    // data).
+    const Lanes bound =
+        change.relative > 0 ? lesserOf(lanesOf(kMaxAlbedoChange / change.relative), lanesOf(kMaxCommonShare)) : Lanes{};
+    const Lanes common = greaterOf(-bound, lesserOf(bound, lanesOf(unclamped)));
     // Without a common change c is matched as it is (subtracting a zero and
     // dividing by 1 leave it so, up to the sign of zeros, which the match
     // ignores); else the corrected change is normalised again.
     const Lanes corrected = c - common;
     const float norm = largestOfChannels(absolute(corrected));
-    const float divisor = common != 0 && norm > 0 ? norm : 1.0f;
+    const float divisor = common[0] != 0 && norm > 0 ? norm : 1.0f;
     return scaledMatchError(corrected / divisor, terms, scales.on, scales.off);
 }
 
@@ -203,12 +208,7 @@ void transpose(Lanes v[4])  // rows to columns: v[j][i] = v[i][j] before
     v[3] = __builtin_shuffle(t2, t3, Index{2, 3, 6, 7});
 }
 
-Lanes lanesOf(float v) { return Lanes{} + v; }
 Lanes floatsOf(LaneMask v) { return __builtin_convertvector(v, Lanes); }
-// a < b ? a : b and a > b ? a : b per lane, which GCC compiles to SSE2's
-// minps and maxps (3 instructions fewer than a select by masks).
-Lanes lesserOf(Lanes a, Lanes b) { return a < b ? a : b; }
-Lanes greaterOf(Lanes a, Lanes b) { return a > b ? a : b; }
 // std::max({x, y, z}) per lane: the first of the largest.
 Lanes largestOf(Lanes x, Lanes y, Lanes z) { return greaterOf(z, greaterOf(y, x)); }
 // x where mask, else +0: one and, where a select takes three.
@@ -266,8 +266,8 @@ SymbolLanes bestSymbolLanes(const Lanes from[3], const Lanes to[3], float t, con
     const Lanes viaMidpoint = 0.5f * (group[0] * scaleOf(count[0]) + group[2] * scaleOf(count[2]));
     const Lanes viaConstant = select(count[1] == 3, group[1] / 3.0f, group[1] * scaleOf(count[1]));
     Lanes common = viaConstant * flag(count[1] > 0) + viaMidpoint * flag((count[1] == 0) & (count[0] > 0) & (count[2] > 0));
-    // minOf(kMaxCommonShare, share) where relative > 0, then the clamp as
-    // minOf and maxOf in symbolError's operand order.
+    // std::min(kMaxCommonShare, share) where relative > 0, then the clamp,
+    // in symbolError's operand order.
     const Lanes bound = where(relative > 0, lesserOf(kMaxAlbedoChange / relative, lanesOf(kMaxCommonShare)));
     common = greaterOf(-bound, lesserOf(bound, common));
     Lanes corrected[3];
