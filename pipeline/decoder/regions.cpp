@@ -112,10 +112,9 @@ void computeRegions(DecoderWorkspace& ws)
         if (whole < end) std::memcpy(out, pixel, 3);
     });
 
-    // Regions of up to 255 pixels in pairs (channelMediansPair overlaps
-    // their searches), each as it comes with the one before it left over;
-    // larger ones alone. channelMedians reads up to 4 pixels past a region's
-    // last: the last regions take the reference.
+    // Regions of up to 255 pixels four at a time (channelMediansOfFour
+    // overlaps their searches), larger ones alone. channelMedians reads up
+    // to 4 pixels past a region's last: the last regions take the reference.
     const std::ptrdiff_t n = static_cast<std::ptrdiff_t>(w) * h;
     const cv::Matx33f& m = ws.colorCorrection;
     auto setColor = [&](int r, const std::array<std::uint8_t, 3>& byByte) {
@@ -123,24 +122,28 @@ void computeRegions(DecoderWorkspace& ws)
         const cv::Vec3f corrected = m * median;
         regions[r].color = {corrected[0], corrected[1], corrected[2]};
     };
-    auto pixelsOf = [&](int r) { return sorted + counter[r] - regions[r].pixelCount; };
-    int waiting = -1;  // a region of up to 255 pixels without a pair yet
+    std::array<const std::uint32_t*, 4> smallPixels;
+    std::array<int, 4> smallCounts, small;  // the regions waiting for a group of 4
+    int waiting = 0;
     for (int r = 0; r < count; ++r) {
         const int size = regions[r].pixelCount;
+        const std::uint32_t* pixels = sorted + counter[r] - size;
         if (counter[r] + 4 > n) {
-            setColor(r, channelMediansReference(pixelsOf(r), size));
+            setColor(r, channelMediansReference(pixels, size));
         } else if (size > 255) {
-            setColor(r, channelMedians(pixelsOf(r), size));
-        } else if (waiting < 0) {
-            waiting = r;
+            setColor(r, channelMedians(pixels, size));
         } else {
-            const auto both = channelMediansPair(pixelsOf(waiting), regions[waiting].pixelCount, pixelsOf(r), size);
-            setColor(waiting, both[0]);
-            setColor(r, both[1]);
-            waiting = -1;
+            smallPixels[waiting] = pixels;
+            smallCounts[waiting] = size;
+            small[waiting] = r;
+            if (++waiting == 4) {
+                const auto medians = channelMediansOfFour(smallPixels, smallCounts);
+                for (int j = 0; j < 4; ++j) setColor(small[j], medians[j]);
+                waiting = 0;
+            }
         }
     }
-    if (waiting >= 0) setColor(waiting, channelMedians(pixelsOf(waiting), regions[waiting].pixelCount));
+    for (int j = 0; j < waiting; ++j) setColor(small[j], channelMedians(smallPixels[j], smallCounts[j]));
 }
 
 }  // namespace stria::pipeline

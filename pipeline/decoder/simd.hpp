@@ -82,9 +82,9 @@ void projectedGradientWindows(const std::uint8_t* row, int width, const std::int
 // must be readable.
 std::array<std::uint8_t, 3> channelMediansReference(const std::uint32_t* pixels, int count);
 std::array<std::uint8_t, 3> channelMedians(const std::uint32_t* pixels, int count);
-// The same for two regions at once, faster where both have up to 255 pixels.
-std::array<std::array<std::uint8_t, 3>, 2> channelMediansPair(const std::uint32_t* a, int countA,
-                                                              const std::uint32_t* b, int countB);
+// The same for four regions at once, faster where each has up to 255 pixels.
+std::array<std::array<std::uint8_t, 3>, 4> channelMediansOfFour(const std::array<const std::uint32_t*, 4>& pixels,
+                                                                const std::array<int, 4>& counts);
 
 // Region statistics and graph (regions.cpp, graph.cpp). Bit i of the result
 // is set where a[i] != b[i], for i < count <= 64: with b = a + 1 the borders

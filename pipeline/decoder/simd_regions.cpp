@@ -236,23 +236,28 @@ std::array<std::uint8_t, 3> channelMedians(const std::uint32_t* pixels, int coun
 #endif
 }
 
-std::array<std::array<std::uint8_t, 3>, 2> channelMediansPair(const std::uint32_t* a, int countA,
-                                                              const std::uint32_t* b, int countB)
+std::array<std::array<std::uint8_t, 3>, 4> channelMediansOfFour(const std::array<const std::uint32_t*, 4>& pixels,
+                                                                const std::array<int, 4>& counts)
 {
+    std::array<std::array<std::uint8_t, 3>, 4> medians;
 #if defined(__ARM_NEON) || defined(__SSE2__)
-    if (countA <= 255 && countB <= 255) {
+    if (std::max({counts[0], counts[1], counts[2], counts[3]}) <= 255) {
         // Each pass ends in a chain of dependent steps (the sums over the
-        // pixels, the next limit), which the other region's compares overlap.
-        ByteSearch sa = startSearch(a, countA), sb = startSearch(b, countB);
+        // pixels, the next limit), which the other regions' compares
+        // overlap (780x580 medians 0.46 -> 0.42 ms, from two at a time).
+        std::array<ByteSearch, 4> searches;
+        for (int j = 0; j < 4; ++j) searches[j] = startSearch(pixels[j], counts[j]);
         Bytes bit = firstBit();
         for (int pass = 0; pass < 8; ++pass, bit = nextBit(bit)) {
-            searchPass(sa, bit);
-            searchPass(sb, bit);
+#pragma GCC unroll 4
+            for (ByteSearch& s : searches) searchPass(s, bit);
         }
-        return {searchResult(sa), searchResult(sb)};
+        for (int j = 0; j < 4; ++j) medians[j] = searchResult(searches[j]);
+        return medians;
     }
 #endif
-    return {channelMedians(a, countA), channelMedians(b, countB)};
+    for (int j = 0; j < 4; ++j) medians[j] = channelMedians(pixels[j], counts[j]);
+    return medians;
 }
 
 }  // namespace stria::pipeline

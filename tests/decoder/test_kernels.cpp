@@ -151,15 +151,17 @@ int regionMediansDiffering(unsigned seed)
     std::mt19937 rng(seed);
     std::vector<std::uint32_t> pixels(3000 + 4);
     int differing = 0;
-    std::vector<std::uint32_t> other(255 + 4);
+    std::vector<std::uint32_t> other(5 + 255 + 4);
     auto compare = [&](int count) {
         differing += channelMedians(pixels.data(), count) != channelMediansReference(pixels.data(), count);
-        // The pair kernel, with a second region of 1-255 random pixels.
-        const int otherCount = 1 + (count * 37) % 255;
-        for (int i = 0; i < otherCount; ++i) other[i] = rng();
-        const auto both = channelMediansPair(pixels.data(), count, other.data(), otherCount);
-        differing += both[0] != channelMediansReference(pixels.data(), count);
-        differing += both[1] != channelMediansReference(other.data(), otherCount);
+        // The kernel for four regions: this one, then three of 1-255 random
+        // pixels in the second buffer.
+        const std::array<int, 4> counts{count, 1 + (count * 37) % 255, 1 + count % 16, 255 - count % 255};
+        const std::array<const std::uint32_t*, 4> regions{pixels.data(), other.data(), other.data() + 5,
+                                                          other.data() + 3};
+        for (std::uint32_t& p : other) p = rng();
+        const auto medians = channelMediansOfFour(regions, counts);
+        for (int j = 0; j < 4; ++j) differing += medians[j] != channelMediansReference(regions[j], counts[j]);
     };
     for (int count : {1, 2, 3, 4, 5, 63, 64, 65, 252, 255, 256, 257, 1016, 1019, 1020, 3000})
         for (int kind = 0; kind < 3; ++kind) {
