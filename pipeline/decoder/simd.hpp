@@ -40,8 +40,8 @@ void descentRow(const std::uint8_t* up, const std::uint8_t* row, const std::uint
 // Code bit set on arrows the plateau pass added (code kPlateauArrow | direction).
 inline constexpr std::uint8_t kPlateauArrow = 4;
 // Code bit set on the pixels of regional minima (code kMinimumArrow | an
-// arrow up or left to a pixel of the same minimum, or | kDescentFlat on the
-// minimum's first pixel in each of its rows' runs that has none).
+// arrow up or left to a pixel of the same minimum, or | kDescentFlat where
+// it has neither: on the first pixel of a new minimum's run).
 inline constexpr std::uint8_t kMinimumArrow = 16;
 // The label of a pixel whose basin is not known yet (and beyond the row's ends).
 inline constexpr std::int32_t kUnresolved = std::numeric_limits<std::int32_t>::min();

@@ -21,11 +21,11 @@
 // level (cache misses, IPC about 0.5); here every pass reads rows in order
 // and every arrow leads to a neighbour. Branches on data mispredict (flat
 // pixels and runs of arrows come in runs of every length), so the passes
-// avoid them: the minima take their labels and the arrows along a row
-// theirs by a prefix scan of 4 labels per step (sweepRowUpLeft, sweepRow),
-// unions and new minima come from bit masks, the minima's pixels keep arrows
-// to their first pixels (so only those take their basin one by one, picked 8
-// pixels at a time), and only paths leading down are walked.
+// avoid them: the minima are found on runs of flat pixels as bit masks,
+// their pixels keep arrows to their runs' first pixels (so only those take
+// a label one by one), the arrows along a row take their labels by a prefix
+// scan of 4 labels per step (sweepRow), and only paths leading down are
+// walked.
 #include "pipeline/decoder/workspace.hpp"
 
 #include "pipeline/decoder/simd.hpp"
@@ -106,6 +106,37 @@ std::int32_t findRoot(std::int32_t* parent, std::int32_t l)
     return l;
 }
 
+// A row's flat pixels as bits, 64 pixels per word (bit x % 64 of word x / 64).
+struct RunWord {
+    std::uint64_t flat = 0;
+    std::uint64_t starts = 0;  // the first pixel of each run of flat pixels
+    std::uint64_t fresh = 0;   // those without a flat pixel above: new minima
+    std::uint64_t joins = 0;   // flat pixels past a run's start with a run above starting there
+    std::int32_t lastStart = 0;  // the last start in the words before (0 if none)
+};
+
+int runWords(int width) { return (width + 63) / 64; }
+
+// The run words of two rows, in the scratch after the watershed's other
+// entries (watershedScratchEntries), aligned.
+RunWord* runWordsIn(std::int32_t* scratch, int width, int height)
+{
+    static_assert(alignof(RunWord) == 2 * alignof(std::int32_t));
+    const std::size_t offset = codeEntries(static_cast<std::size_t>(width) * height, width) + width + 8 + 64;
+    return reinterpret_cast<RunWord*>(scratch + offset + offset % 2);
+}
+
+// The first pixel of the run holding flat pixel x (the last start at or
+// before x), without a branch (runs end anywhere).
+std::int32_t runStart(const RunWord* words, int x)
+{
+    const RunWord& word = words[x >> 6];
+    const std::uint64_t before = word.starts & (~0ull >> (63 - (x & 63)));
+    const std::int32_t inWord = (x & ~63) + 63 - std::countl_zero(before | 1);
+    const std::int32_t found = -static_cast<std::int32_t>(before != 0);
+    return (inWord & found) | (word.lastStart & ~found);
+}
+
 // Root of a basin in the union-find of excess basins (path halving).
 std::int32_t findBasin(std::int32_t* parent, std::int32_t b)
 {
@@ -118,8 +149,10 @@ std::int32_t findBasin(std::int32_t* parent, std::int32_t b)
 std::size_t watershedScratchEntries(int width, int height)
 {
     // The codes and the wall, then the first pixels' columns of a row (and 8
-    // more), then 64 labels kUnresolved.
-    return codeEntries(static_cast<std::size_t>(width) * height, width) + width + 8 + 64;
+    // more), then 64 labels kUnresolved, then the run words of two rows
+    // (after at most one entry to align them).
+    return codeEntries(static_cast<std::size_t>(width) * height, width) + width + 8 + 64 + 1 +
+           2 * runWords(width) * sizeof(RunWord) / sizeof(std::int32_t);
 }
 
 void computeWatershed(DecoderWorkspace& ws)
@@ -128,8 +161,8 @@ void computeWatershed(DecoderWorkspace& ws)
     const std::uint8_t* g = ws.gradient.get();
     std::int32_t* label = ws.labels.get();
     // Scratch: the codes, a row of 255 (the wall beyond the image border),
-    // a row's minima codes (bytes), later its first pixels' columns, and 64
-    // unresolved labels to compare with.
+    // a row's minima codes (bytes), later its first pixels' columns, 64
+    // unresolved labels to compare with, and the run words (runWordsIn).
     auto* code = reinterpret_cast<std::uint8_t*>(ws.scratch.get());
     std::uint8_t* wall = code + n;
     std::int32_t* columns = ws.scratch.get() + codeEntries(n, w);
@@ -185,22 +218,25 @@ void computeWatershed(DecoderWorkspace& ws)
 
     // 3. The flat pixels left are regional minima: connected components by
     // union-find over provisional labels in raster order (adjacent flat
-    // pixels are on one level); every other pixel is unresolved. Row by row
-    // without a branch per pixel (flat runs are short: branches on their
-    // ends mispredict): each flat pixel gets a code for the row sweep, an
-    // arrow left if its left neighbour is flat, else up if the upper one is
-    // (plus kPlateauArrow, which the sweep ignores, where both are: the
-    // candidates for a union), else kDescentFlat: those start a minimum (a
-    // provisional label, in raster order); other pixels get kNotMinimum.
-    // sweepRowUpLeft copies the labels; where a candidate's left and upper
-    // labels then differ, their minima join. Each flat pixel's code becomes
-    // kMinimumArrow | its minimum code: arrows up and left that step 4's
-    // sweeps follow from each run's first pixel (kDescentFlat, the only code
-    // with bit 3), so that only those take their basin by the union-find.
+    // pixels are on one level), row by row on runs of flat pixels as bits, 64
+    // pixels per word (branches on the runs' ends mispredicted): a run that
+    // starts below a flat pixel takes its run's label, any other starts a
+    // minimum (a provisional label, in raster order); where a run meets
+    // another run above past its own start, their minima join. The labels
+    // are written at the runs' first pixels only; every other pixel is
+    // unresolved. Each flat pixel's code becomes kMinimumArrow | an arrow
+    // left if its left neighbour is flat, else up if the upper one is, else
+    // kDescentFlat (the only code with bit 3): step 4's sweeps follow those
+    // arrows from the first pixels, so only the new minima's first pixels
+    // take their basin by the union-find.
     std::fill(label, label + n, kUnresolved);
     std::int32_t* parent = ws.pixelOrder;
     auto* minimumCode = reinterpret_cast<std::uint8_t*>(columns);
-    int provisional = 0, minima = 0;
+    const int words = runWords(w);
+    RunWord* runs = runWordsIn(ws.scratch.get(), w, h);
+    RunWord* runsAbove = runs + words;
+    std::fill(runsAbove, runsAbove + words, RunWord{});  // above row 0: none
+    int provisional = 0, joined = 0;
     // The 8 codes at p as a word, and bit k set if byte k of a word has bit 0.
     auto codes8 = [](const std::uint8_t* p) {
         static_assert(std::endian::native == std::endian::little, "byte k of the word is pixel k");
@@ -211,70 +247,71 @@ void computeWatershed(DecoderWorkspace& ws)
     auto bitsOf = [](std::uint64_t word) {
         return static_cast<unsigned>(((word & 0x0101010101010101ull) * 0x0102040810204080ull) >> 56);
     };
-    constexpr std::uint8_t kNotMinimum = kDescentFlat | kPlateauArrow;  // not swept
     // The codes by byte masks, which the compiler vectorises (ternaries
     // became branches).
     auto mask = [](bool condition) { return static_cast<std::uint8_t>(-static_cast<int>(condition)); };
     for (int y = 0; y < h; ++y) {
         std::uint8_t* rowCode = code + y * w;
         std::int32_t* row = label + y * w;
-        // Row 0: the wall above (never a minimum); the labels read there unused.
-        const std::uint8_t* codeAbove = y > 0 ? rowCode - w : wall;
+        // Row 0: nothing above; the label read there for a new minimum unused.
         const std::int32_t* labelAbove = y > 0 ? row - w : row;
-        auto minimumAbove = [&](int x) { return (codeAbove[x] & 0xf0) == kMinimumArrow; };  // not the wall
-        minimumCode[0] = rowCode[0] != kDescentFlat ? kNotMinimum
-                         : minimumAbove(0)          ? kDescentUp
-                                                    : kDescentFlat;
+        std::uint64_t carry = 0, carryAbove = 0;  // bit 63 of the previous word
+        std::int32_t last = 0;
+        for (int k = 0; k < words; ++k) {
+            const int x0 = 64 * k, span = std::min(64, w - x0);
+            std::uint64_t flat = 0;  // code kDescentFlat, the only one with bit 3
+            int x = x0;
+            for (; x + 8 <= x0 + span; x += 8) flat |= std::uint64_t{bitsOf(codes8(rowCode + x) >> 3)} << (x - x0);
+            for (; x < x0 + span; ++x) flat |= std::uint64_t{rowCode[x] == kDescentFlat} << (x - x0);
+            const std::uint64_t left = flat << 1 | carry, above = runsAbove[k].flat,
+                                aboveLeft = above << 1 | carryAbove;
+            carry = flat >> 63;
+            carryAbove = above >> 63;
+            RunWord& word = runs[k];
+            word.flat = flat;
+            word.starts = flat & ~left;
+            word.fresh = word.starts & ~above;
+            word.joins = flat & left & above & ~aboveLeft;
+            word.lastStart = last;
+            if (word.starts != 0) last = x0 + 63 - std::countl_zero(word.starts);
+        }
+        for (int k = 0; k < words; ++k)
+            for (std::uint64_t bits = runs[k].starts; bits != 0; bits &= bits - 1) {
+                const int x = 64 * k + std::countr_zero(bits);
+                // Without a branch: -1 for a new minimum (which reads a label
+                // above in vain and keeps its parent entry).
+                const std::int32_t fresh = -static_cast<std::int32_t>(runs[k].fresh >> (x & 63) & 1);
+                const std::int32_t above = ~labelAbove[runStart(runsAbove, x)];
+                parent[provisional] = ~(y * w + x);
+                row[x] = ~((provisional & fresh) | (above & ~fresh));
+                provisional -= fresh;
+            }
+        for (int k = 0; k < words; ++k)
+            for (std::uint64_t bits = runs[k].joins; bits != 0; bits &= bits - 1) {
+                const int x = 64 * k + std::countr_zero(bits);
+                const std::int32_t a = findRoot(parent, ~row[runStart(runs, x)]),
+                                   b = findRoot(parent, ~labelAbove[runStart(runsAbove, x)]);
+                if (a != b) {
+                    parent[std::max(a, b)] = std::min(a, b);
+                    ++joined;
+                }
+            }
+        // Row 0: the wall above (never a minimum).
+        const std::uint8_t* codeAbove = y > 0 ? rowCode - w : wall;
+        auto minimumAbove = [&](int x) { return (codeAbove[x] & 0xf0) == kMinimumArrow; };
+        minimumCode[0] = rowCode[0] != kDescentFlat ? rowCode[0]
+                         : minimumAbove(0)          ? kMinimumArrow | kDescentUp
+                                                    : kMinimumArrow | kDescentFlat;
         for (int x = 1; x < w; ++x) {
             const std::uint8_t flat = mask(rowCode[x] == kDescentFlat), up = mask(minimumAbove(x)),
                                left = mask(rowCode[x - 1] == kDescentFlat);
-            const std::uint8_t continued = (left & (kDescentLeft | (up & kPlateauArrow))) | (~left & ~up & kDescentFlat);
-            minimumCode[x] = (flat & continued) | (~flat & kNotMinimum);
+            const std::uint8_t arrow = (left & kDescentLeft) | (~left & ~up & kDescentFlat);
+            minimumCode[x] = (flat & (kMinimumArrow | arrow)) | (~flat & rowCode[x]);
         }
-        // New minima, 64 pixels at a time as bits: code kDescentFlat, the
-        // only code with bit 3 and without bit 2.
-        for (int x0 = 0; x0 < w; x0 += 64) {
-            const int span = std::min(64, w - x0);
-            std::uint64_t fresh = 0;
-            int x = x0;
-            for (; x + 8 <= x0 + span; x += 8)
-                fresh |= std::uint64_t{bitsOf(codes8(minimumCode + x) >> 3 & ~(codes8(minimumCode + x) >> 2))}
-                         << (x - x0);
-            for (; x < x0 + span; ++x) fresh |= std::uint64_t{minimumCode[x] == kDescentFlat} << (x - x0);
-            for (; fresh != 0; fresh &= fresh - 1) {
-                const int p = y * w + x0 + std::countr_zero(fresh);
-                parent[provisional] = ~p;
-                label[p] = ~provisional++;
-                ++minima;
-            }
-        }
-        sweepRowUpLeft(minimumCode, labelAbove, row, w);
-        // Unions where a candidate's labels differ (the candidates' codes are
-        // the only ones with bits 0 and 2).
-        for (int x0 = 0; x0 < w; x0 += 64) {
-            const int span = std::min(64, w - x0);
-            std::uint64_t candidates = 0;
-            int x = x0;
-            for (; x + 8 <= x0 + span; x += 8)
-                candidates |= std::uint64_t{bitsOf(codes8(minimumCode + x) & codes8(minimumCode + x) >> 2)}
-                              << (x - x0);
-            for (; x < x0 + span; ++x)
-                candidates |= std::uint64_t{minimumCode[x] == (kDescentLeft | kPlateauArrow)} << (x - x0);
-            for (candidates &= borderMask(row + x0, labelAbove + x0, span); candidates != 0;
-                 candidates &= candidates - 1) {
-                const int x1 = x0 + std::countr_zero(candidates);
-                const std::int32_t a = findRoot(parent, ~row[x1]), b = findRoot(parent, ~labelAbove[x1]);
-                if (a != b) {
-                    parent[std::max(a, b)] = std::min(a, b);
-                    --minima;
-                }
-            }
-        }
-        for (int x = 0; x < w; ++x) {
-            const std::uint8_t minimum = mask(minimumCode[x] != kNotMinimum);
-            rowCode[x] = (minimum & (kMinimumArrow | minimumCode[x])) | (~minimum & rowCode[x]);
-        }
+        std::memcpy(rowCode, minimumCode, w);
+        std::swap(runs, runsAbove);
     }
+    const int minima = provisional - joined;
 
     // Basin numbers in raster order of each minimum's first pixel. Over
     // capacity, the lowest minima keep theirs (raster order within the
@@ -307,8 +344,9 @@ void computeWatershed(DecoderWorkspace& ws)
     // first pixel or an arrow down, never at one against it), without a
     // branch (sweepRow). What remains leads down: those pixels, found 64 at a
     // time by a compare mask, walk to a labelled pixel and label the path on
-    // the way back. A walk ends at a path labelled before or at a minimum's
-    // pixel in a row below, which still holds its provisional label.
+    // the way back. A walk ends at a path labelled before or, in a row
+    // below, at the first pixel of a minimum's run (along the run's arrows),
+    // which still holds its provisional label.
     for (int y = 0; y < h; ++y) {
         const std::uint8_t* rowCode = code + y * w;
         std::int32_t* row = label + y * w;

@@ -439,7 +439,8 @@ TEST(DecoderKernels, WatershedMatchesReferenceOnTinyAndTerracedImages)
     std::mt19937 rng(22);
     int truncatedCases = 0;
     for (const auto& [w, h] : {std::pair{1, 1}, std::pair{1, 2}, std::pair{2, 1}, std::pair{2, 2}, std::pair{1, 37},
-                              std::pair{37, 1}, std::pair{2, 33}, std::pair{33, 2}, std::pair{40, 30}})
+                              std::pair{37, 1}, std::pair{2, 33}, std::pair{33, 2}, std::pair{40, 30},
+                              std::pair{200, 9}})  // runs across the 64-pixel words of the minima's bit masks
         for (const int count : {4, 256})
             for (const int maxRegions : {w * h, 3}) {
                 const std::vector<std::uint8_t> g = randomLevels(w, h, 0, count, rng);
