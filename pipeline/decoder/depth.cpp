@@ -38,6 +38,18 @@ constexpr std::int32_t kUndecoded = -(1 << 30);
 // Four float lanes (GCC vector extensions: SSE2 on x86-64, NEON on ARM).
 using Lanes = float __attribute__((vector_size(16)));
 
+// Rows to columns: v[j][i] = v[i][j] before (the first 4 vectors).
+void transpose(Lanes v[4])
+{
+    using Index = std::int32_t __attribute__((vector_size(16)));
+    const Lanes t0 = __builtin_shuffle(v[0], v[1], Index{0, 4, 1, 5}), t1 = __builtin_shuffle(v[2], v[3], Index{0, 4, 1, 5});
+    const Lanes t2 = __builtin_shuffle(v[0], v[1], Index{2, 6, 3, 7}), t3 = __builtin_shuffle(v[2], v[3], Index{2, 6, 3, 7});
+    v[0] = __builtin_shuffle(t0, t1, Index{0, 1, 4, 5});
+    v[1] = __builtin_shuffle(t0, t1, Index{2, 3, 6, 7});
+    v[2] = __builtin_shuffle(t2, t3, Index{0, 1, 4, 5});
+    v[3] = __builtin_shuffle(t2, t3, Index{2, 3, 6, 7});
+}
+
 // Camera rays along one image row: a bilinear look-up in the undistorted ray
 // grid (rayGrid, every rayGridStep pixels), with the row's grid row and
 // vertical weight computed once per row, and u divided by the grid step as a
@@ -110,7 +122,11 @@ void computePoints(DecoderWorkspace& ws)
     std::array<std::int32_t, kBatch> at, edges, firsts;
     std::array<cv::Vec3f, kBatch> weights;
     std::array<std::array<float, kWindowSamples + 1>, kBatch> samples;
-    std::array<double, kBatch> columns;
+    // The centroids' arrays have room for 3 more: a batch in 4 lanes.
+    std::array<double, kBatch + 3> columns;
+    std::array<const float*, kBatch + 3> windows;  // the centroid's samples in samples[]
+    std::array<std::int32_t, kBatch + 3> peaks;
+    std::array<float, kBatch + 3> thresholds;
 
     for (int y = 0; y < h; ++y) {
         const std::int32_t* label = labels + static_cast<std::ptrdiff_t>(y) * w;
@@ -166,7 +182,8 @@ void computePoints(DecoderWorkspace& ws)
                 // most edges take 8 samples (two kernel steps of 4) rather
                 // than 9 (three).
                 projectedGradientWindows(row, w, firsts.data(), weights.data(), count, ws.rgbOffset, m, samples.data());
-                // Step 4: the sub-pixel column.
+                // Step 4: the sub-pixel column: each edge's peak, then the
+                // centroids around the peaks, 4 at a time.
                 int located = 0;
                 for (int j = 0; j < count; ++j) {
                     const int x = at[j];
@@ -193,31 +210,46 @@ void computePoints(DecoderWorkspace& ws)
                     if (peak == x + kSearchRadius)
                         projectedGradientsReference(row, x + 2 * kSearchRadius, 1, ws.rgbOffset, m, weights[j],
                                                     &s[2 * kCentre]);
-                    // Centroid of the peak's samples above a quarter of its
-                    // height: averages the noise over ~3 samples, and the
-                    // threshold keeps the tails of the neighbouring stripe
-                    // edges out. Branch-free (the test above keeps the window
-                    // in the image): a sample below the threshold counts as
-                    // zero, by a select on 4 vector lanes and a mask on the
-                    // fifth (GCC compiles std::max(d, 0.0f) as a branch,
-                    // mispredicted 33 000 times per 780x580 frame). The sums
-                    // add the samples in their order, as a loop from 0
-                    // would: the same floats, up to a zero moment's sign,
-                    // which the column does not see.
-                    static_assert(kSearchRadius == 2, "the centroid takes 4 lanes and one more sample");
-                    const float* window = &s[peak - x + kCentre - kSearchRadius];
-                    const float threshold = kCentroidThreshold * peakValue;
-                    Lanes d;
-                    std::memcpy(&d, window, sizeof d);
-                    d -= threshold;
-                    const Lanes g = d > 0 ? d : Lanes{};
-                    const Lanes product = g * Lanes{-2, -1, 0, 1};
-                    const float last = window[4] - threshold;
-                    const float g4 = std::bit_cast<float>(std::bit_cast<std::uint32_t>(last) & -static_cast<std::uint32_t>(last > 0));
-                    const float sum = g[0] + g[1] + g[2] + g[3] + g4;
-                    const float moment = product[0] + product[1] + product[2] + product[3] + g4 * 2;
-                    columns[located] = peak + 0.5 + moment / sum;
+                    windows[located] = &s[peak - x + kCentre - kSearchRadius];
+                    peaks[located] = peak;
+                    thresholds[located] = kCentroidThreshold * peakValue;
                     edges[located++] = edges[j];
+                }
+                // Centroid of the peak's samples above a quarter of its
+                // height: averages the noise over ~3 samples, and the
+                // threshold keeps the tails of the neighbouring stripe edges
+                // out. 4 windows at once, sample k of window i in lane i of
+                // vector k (so the sums are vector additions, not additions
+                // across lanes), branch-free (the test above keeps the window
+                // in the image): a sample below the threshold counts as zero,
+                // by a select (GCC compiles std::max(d, 0.0f) as a branch,
+                // mispredicted 33 000 times per 780x580 frame). The sums add
+                // the samples in their order, as a loop from 0 would: the
+                // same floats, up to a zero moment's sign, which the column
+                // does not see.
+                static_assert(kSearchRadius == 2, "the centroid takes 5 samples");
+                for (int i = located; i < located + 3 && located > 0; ++i) {  // lanes past the last repeat it
+                    windows[i] = windows[located - 1];
+                    thresholds[i] = thresholds[located - 1];
+                    peaks[i] = peaks[located - 1];
+                }
+                for (int j0 = 0; j0 < located; j0 += 4) {
+                    Lanes d[5], threshold;
+                    for (int i = 0; i < 4; ++i) {
+                        std::memcpy(&d[i], windows[j0 + i], sizeof(Lanes));
+                        d[4][i] = windows[j0 + i][4];
+                    }
+                    std::memcpy(&threshold, &thresholds[j0], sizeof threshold);
+                    transpose(d);
+                    Lanes g[5];
+                    for (int k = 0; k < 5; ++k) {
+                        d[k] -= threshold;
+                        g[k] = d[k] > 0 ? d[k] : Lanes{};
+                    }
+                    const Lanes sum = g[0] + g[1] + g[2] + g[3] + g[4];
+                    const Lanes moment = g[0] * -2.0f + g[1] * -1.0f + g[2] * 0.0f + g[3] * 1.0f + g[4] * 2.0f;
+                    const Lanes offset = moment / sum;
+                    for (int i = 0; i < 4; ++i) columns[j0 + i] = peaks[j0 + i] + 0.5 + offset[i];
                 }
                 // Step 5: the point where the camera ray through (u, y)
                 // meets the edge's light plane, one per edge and row.
