@@ -49,7 +49,8 @@ PairGradient pairGradient(const FrameView& frame, int x, int y, bool horizontal,
 std::size_t graphScratchEntries(std::size_t regions, std::size_t edges)
 {
     // The label pair of each edge (2 entries), and one more for the look-up's
-    // read at the next free index; the traversal reuses the share.
+    // read at the next free index, then a counter per region; the traversal
+    // reuses the share.
     return regions + 2 * edges + 2;
 }
 
@@ -157,25 +158,31 @@ void buildGraph(DecoderWorkspace& ws)
 
     ws.edgeCount = edgeCount;
 
-    // The pairs, then the incidence lists (CSR).
+    // The pairs, then the incidence lists (CSR), each region's degree and
+    // then its next list position counted in a compact array after the
+    // pairs in the scratch (graphScratchEntries), not in the 64-byte region
+    // records: those are written once, in order, instead of being
+    // incremented at random 4 times per edge.
     Region* regions = ws.regions.get();
-    for (int e = 0; e < ws.edgeCount; ++e) {
-        ws.edges[e].a = static_cast<std::int32_t>(edgeKey[e] >> 32);
-        ws.edges[e].b = static_cast<std::int32_t>(edgeKey[e] & 0xffffffffu);
-        ++regions[ws.edges[e].a].degree;
-        ++regions[ws.edges[e].b].degree;
+    std::int32_t* next = ws.scratch.get() + 2 * static_cast<std::ptrdiff_t>(ws.maxEdges) + 2;
+    std::fill(next, next + ws.regionCount, 0);
+    for (int e = 0; e < edgeCount; ++e) {
+        const auto a = static_cast<std::int32_t>(edgeKey[e] >> 32), b = static_cast<std::int32_t>(edgeKey[e] & 0xffffffffu);
+        edges[e].a = a;
+        edges[e].b = b;
+        ++next[a];
+        ++next[b];
     }
     std::int32_t offset = 0;
     for (int r = 0; r < ws.regionCount; ++r) {
         regions[r].adjacencyBegin = offset;
+        regions[r].degree = next[r];
+        next[r] = offset;
         offset += regions[r].degree;
-        regions[r].degree = 0;
     }
-    for (int e = 0; e < ws.edgeCount; ++e) {
-        for (std::int32_t v : {ws.edges[e].a, ws.edges[e].b}) {
-            Region& r = regions[v];
-            ws.adjacency[r.adjacencyBegin + r.degree++] = e;
-        }
+    for (int e = 0; e < edgeCount; ++e) {
+        ws.adjacency[next[edges[e].a]++] = e;
+        ws.adjacency[next[edges[e].b]++] = e;
     }
 }
 
