@@ -316,24 +316,31 @@ void computeWatershed(DecoderWorkspace& ws)
     // Basin numbers in raster order of each minimum's first pixel. Over
     // capacity, the lowest minima keep theirs (raster order within the
     // threshold level) and the rest are numbered from maxRegions on.
-    int threshold = 256, atThreshold = 0;
-    if (minima > ws.maxRegions) {
+    // Over capacity, the roots' numbers are set first, as ~number.
+    const bool overCapacity = minima > ws.maxRegions;
+    if (overCapacity) {
         std::array<int, 256> count{};
         for (int l = 0; l < provisional; ++l)
             if (parent[l] < 0) ++count[g[~parent[l]]];
-        int kept = 0;
-        for (threshold = 0; kept + count[threshold] <= ws.maxRegions; ++threshold) kept += count[threshold];
-        atThreshold = ws.maxRegions - kept;
-    }
-    int keptCount = 0, excessCount = 0;
-    for (int l = 0; l < provisional; ++l) {
-        if (parent[l] >= 0) {
-            parent[l] = parent[parent[l]];
-            continue;
+        int threshold = 0, kept = 0;
+        for (; kept + count[threshold] <= ws.maxRegions; ++threshold) kept += count[threshold];
+        int atThreshold = ws.maxRegions - kept, keptCount = 0, excessCount = 0;
+        for (int l = 0; l < provisional; ++l) {
+            if (parent[l] >= 0) continue;
+            const int level = g[~parent[l]];
+            const bool keep = level < threshold || (level == threshold && atThreshold-- > 0);
+            parent[l] = ~(keep ? keptCount++ : ws.maxRegions + excessCount++);
         }
-        const int level = g[~parent[l]];
-        const bool kept = level < threshold || (level == threshold && atThreshold-- > 0);
-        parent[l] = kept ? keptCount++ : ws.maxRegions + excessCount++;
+    }
+    // Each label's number: a root's (in raster order, or the one set above),
+    // another's that of its parent, a smaller label numbered before. Without
+    // a branch on roots (it mispredicted).
+    const std::int32_t numbered = -static_cast<std::int32_t>(overCapacity);
+    for (int l = 0, next = 0; l < provisional; ++l) {
+        const std::int32_t up = parent[l], root = up >> 31;  // -1 for a root
+        const std::int32_t number = (~up & numbered) | (next & ~numbered);
+        parent[l] = (number & root) | (parent[up & ~root] & ~root);
+        next -= root;
     }
 
     // 4. Every pixel takes the basin at the end of its arrows, row by row
