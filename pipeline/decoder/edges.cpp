@@ -174,8 +174,9 @@ float symbolError(const EqualizedChange& change, SymbolCode symbol, const MatchS
     // dividing by 1 leave it so, up to the sign of zeros, which the match
     // ignores); else the corrected change is normalised again.
     const Lanes corrected = c - common;
-    const float norm = largestOfChannels(absolute(corrected));
-    const float divisor = common[0] != 0 && norm > 0 ? norm : 1.0f;
+    const Lanes norm = lanesOf(largestOfChannels(absolute(corrected)));
+    // A select, not a branch: whether a common change is removed is data.
+    const Lanes divisor = select((common != 0) & (norm > 0), norm, lanesOf(1.0f));
     return scaledMatchError(corrected / divisor, terms, scales.on, scales.off);
 }
 
