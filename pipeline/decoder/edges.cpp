@@ -301,24 +301,26 @@ void computeEdgeFeatures(DecoderWorkspace& ws)
         const GraphEdge* edge[kBlock];
         Region* a[kBlock];
         Region* b[kBlock];
-        Lanes from[4], to[4], fromCentroid[4], toCentroid[4], border[4];
+        Lanes from[4], to[4], chord[4], border[4];
         LaneMask ends{};
         for (int i = 0; i < kBlock; ++i) {
             edge[i] = &ws.edges[e0 + std::min(i, n - 1)];
             a[i] = &regions[edge[i]->a];
             b[i] = &regions[edge[i]->b];
             ends[i] = edge[i]->a ^ edge[i]->b;
-            // 16 bytes from the colour (R G B, range[0]), the centroid
-            // (x, y and two ints) and the edge's border (count, normal,
-            // gradients), transposed: a vector per field.
+            // 16 bytes from the colour (R G B, range[0]), the centroids'
+            // difference (x, y and two ints' garbage) and the edge's border
+            // (count, normal, gradients), transposed: a vector per field.
             std::memcpy(&from[i], a[i]->color.data(), sizeof(Lanes));
             std::memcpy(&to[i], b[i]->color.data(), sizeof(Lanes));
-            std::memcpy(&fromCentroid[i], &a[i]->centroidX, sizeof(Lanes));
-            std::memcpy(&toCentroid[i], &b[i]->centroidX, sizeof(Lanes));
+            Lanes fromCentroid, toCentroid;
+            std::memcpy(&fromCentroid, &a[i]->centroidX, sizeof(Lanes));
+            std::memcpy(&toCentroid, &b[i]->centroidX, sizeof(Lanes));
+            chord[i] = toCentroid - fromCentroid;
             std::memcpy(&border[i], &edge[i]->borderCount, sizeof(Lanes));
         }
         static_assert(offsetof(GraphEdge, secondaryGradient) - offsetof(GraphEdge, borderCount) == 12);
-        for (Lanes* v : {from, to, fromCentroid, toCentroid, border}) transpose(v);
+        for (Lanes* v : {from, to, chord, border}) transpose(v);
         // Direction (fig. 5): the border's normal (from a to b); if the
         // border is closed or ragged (its chord is short) the centroids decide
         // instead. Across the stripes if it is within 45 degrees of the
@@ -327,8 +329,8 @@ void computeEdgeFeatures(DecoderWorkspace& ws)
         Lanes nx = floatsOf(normal << 16 >> 16), ny = floatsOf(normal >> 16);  // int16 x, y
         const Lanes count = floatsOf((LaneMask)border[0]);
         const LaneMask ragged = nx * nx + ny * ny < 0.0625f * count * count;  // chord < border length / 4
-        nx = select(ragged, toCentroid[0] - fromCentroid[0], nx);
-        ny = select(ragged, toCentroid[1] - fromCentroid[1], ny);
+        nx = select(ragged, chord[0], nx);
+        ny = select(ragged, chord[1], ny);
         // Within 45 degrees of the primary direction: |along| / length >= cos 45.
         const Lanes length2 = nx * nx + ny * ny;
         const Lanes along = nx * ws.primary[0] + ny * ws.primary[1];
