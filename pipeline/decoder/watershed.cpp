@@ -35,6 +35,10 @@
 #include <bit>
 #include <cstring>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 namespace stria::pipeline {
 
 namespace {
@@ -193,9 +197,19 @@ void computeWatershed(DecoderWorkspace& ws)
         queue[tail++] = p;
     };
     // Flat pixels above level 0 (level 0 has no way down) are about 1 %:
-    // they are found 8 at a time.
+    // they are found 16 (SSE2) or 8 at a time.
     for (int y = 0; y < h; ++y) {
         int x = 0;
+#if defined(__SSE2__)
+        const __m128i flat = _mm_set1_epi8(kDescentFlat), zero = _mm_setzero_si128();
+        for (; x + 16 <= w; x += 16) {
+            const __m128i c = _mm_loadu_si128(reinterpret_cast<const __m128i*>(code + y * w + x));
+            const __m128i l = _mm_loadu_si128(reinterpret_cast<const __m128i*>(g + y * w + x));
+            for (unsigned bits = _mm_movemask_epi8(_mm_andnot_si128(_mm_cmpeq_epi8(l, zero), _mm_cmpeq_epi8(c, flat)));
+                 bits != 0; bits &= bits - 1)
+                seed(x + std::countr_zero(bits), y);
+        }
+#endif
         for (; x + 8 <= w; x += 8)
             for (std::uint64_t bits = raisedFlat(code + y * w + x, g + y * w + x); bits != 0; bits &= bits - 1)
                 seed(x + std::countr_zero(bits) / 8, y);
@@ -261,6 +275,13 @@ void computeWatershed(DecoderWorkspace& ws)
             const int x0 = 64 * k, span = std::min(64, w - x0);
             std::uint64_t flat = 0;  // code kDescentFlat, the only one with bit 3
             int x = x0;
+#if defined(__SSE2__)
+            // 16 bits 3 per movemask (bit 3 shifted to each byte's bit 7).
+            for (; x + 16 <= x0 + span; x += 16) {
+                const __m128i c = _mm_loadu_si128(reinterpret_cast<const __m128i*>(rowCode + x));
+                flat |= std::uint64_t{static_cast<std::uint16_t>(_mm_movemask_epi8(_mm_slli_epi16(c, 4)))} << (x - x0);
+            }
+#endif
             for (; x + 8 <= x0 + span; x += 8) flat |= std::uint64_t{bitsOf(codes8(rowCode + x) >> 3)} << (x - x0);
             for (; x < x0 + span; ++x) flat |= std::uint64_t{rowCode[x] == kDescentFlat} << (x - x0);
             const std::uint64_t left = flat << 1 | carry, above = runsAbove[k].flat,
