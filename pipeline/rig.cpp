@@ -126,15 +126,6 @@ Plane RigModel::lightPlaneForColumn(double projectorX) const
     return plane;
 }
 
-std::optional<cv::Vec3d> RigModel::intersectRay(const cv::Vec3d& ray, const Plane& plane)
-{
-    const double denom = plane.normal.dot(ray);
-    if (std::abs(denom) < 1e-12) return std::nullopt;
-    const double t = -plane.d / denom;
-    if (!(t > 0)) return std::nullopt;
-    return ray * t;
-}
-
 std::optional<cv::Vec3d> RigModel::triangulate(const cv::Vec2d& pixel, const Plane& plane) const
 {
     return intersectRay(camera_.rayThroughPixel(pixel), plane);
