@@ -234,8 +234,8 @@ void computeWatershed(DecoderWorkspace& ws)
     // union-find over provisional labels in raster order (adjacent flat
     // pixels are on one level), row by row on runs of flat pixels as bits, 64
     // pixels per word (branches on the runs' ends mispredicted): a run that
-    // starts below a flat pixel takes its run's label, any other starts a
-    // minimum (a provisional label, in raster order); where a run meets
+    // starts below a flat pixel takes the label of the run there, any other
+    // starts a minimum (a provisional label, in raster order); where a run meets
     // another run above past its own start, their minima join. The labels
     // are written at the runs' first pixels only; every other pixel is
     // unresolved. Each flat pixel's code becomes kMinimumArrow | an arrow
@@ -336,8 +336,8 @@ void computeWatershed(DecoderWorkspace& ws)
 
     // Basin numbers in raster order of each minimum's first pixel. Over
     // capacity, the lowest minima keep theirs (raster order within the
-    // threshold level) and the rest are numbered from maxRegions on.
-    // Over capacity, the roots' numbers are set first, as ~number.
+    // threshold level) and the rest are numbered from maxRegions on: then
+    // the roots' numbers are set first, as ~number.
     const bool overCapacity = minima > ws.maxRegions;
     if (overCapacity) {
         std::array<int, 256> count{};
