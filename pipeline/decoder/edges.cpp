@@ -125,7 +125,12 @@ float scaledMatchError(Lanes c, const SymbolTerms& terms, float onScale, float o
 
 EqualizedChange equalizedChange(const DecoderWorkspace& ws, int from, int to)
 {
-    const Lanes f = lanesOf(ws.regions[from].color), t = lanesOf(ws.regions[to].color);
+    // The colours by 16-byte loads: the fourth lane is range[0], finite,
+    // computed on and ignored.
+    static_assert(offsetof(Region, range) == sizeof(Region::color));
+    Lanes f, t;
+    std::memcpy(&f, ws.regions[from].color.data(), sizeof f);
+    std::memcpy(&t, ws.regions[to].color.data(), sizeof t);
     const Lanes raw = t - f;
     const Lanes half = 0.5f * (f + t);
     Lanes c = raw / select(half < kMinBrightness, lanesOf(kMinBrightness), half);
