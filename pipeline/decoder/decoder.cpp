@@ -68,6 +68,27 @@ std::size_t scratchEntries(int width, int height, int maxRegions, int maxEdges)
                      graphScratchEntries(maxRegions, maxEdges)});
 }
 
+std::size_t allocateFrameBuffers(DecoderWorkspace& ws)
+{
+    std::size_t bytes = 0;
+    const int w = ws.width, h = ws.height;
+    const std::size_t n = static_cast<std::size_t>(w) * h;
+    const std::size_t borderBytes = sizeof(std::uint64_t) * static_cast<std::size_t>(borderWords(w)) * h;
+    ws.gradient = allocate<std::uint8_t>(std::max(n, borderBytes), bytes);
+    ws.rowBorders = reinterpret_cast<std::uint64_t*>(ws.gradient.get());
+    ws.labels = allocate<std::int32_t>(n, bytes);
+    ws.orderEntries = std::max<std::size_t>(n, graphTableEntries(ws.maxRegions, ws.maxEdges));
+    ws.orderAndPoints = allocate<std::byte>(ws.orderEntries * sizeof(std::int32_t), bytes);
+    ws.pixelOrder = reinterpret_cast<std::int32_t*>(ws.orderAndPoints.get());
+    ws.points = reinterpret_cast<ScanPoint*>(ws.orderAndPoints.get());
+    ws.scratch = allocate<std::int32_t>(scratchEntries(w, h, ws.maxRegions, ws.maxEdges), bytes);
+    ws.regions = allocate<Region>(ws.maxRegions, bytes);
+    ws.edges = allocate<GraphEdge>(ws.maxEdges, bytes);
+    ws.edgeFeatures = allocate<EdgeFeature>(ws.maxEdges, bytes);
+    ws.adjacency = allocate<std::int32_t>(2 * static_cast<std::size_t>(ws.maxEdges), bytes);
+    return bytes;
+}
+
 Decoder::Decoder(std::unique_ptr<DecoderWorkspace> workspace) : ws_(std::move(workspace)) {}
 Decoder::~Decoder() = default;
 
@@ -103,20 +124,8 @@ Result<std::unique_ptr<Decoder>> Decoder::create(const StripePattern& pattern, c
                              std::to_string(1 << EdgeFeature::kEndBits) + " are supported");
 
     std::size_t& bytes = ws->allocatedBytes;
-    const std::size_t borderBytes = sizeof(std::uint64_t) * static_cast<std::size_t>(borderWords(w)) * h;
-    ws->gradient = allocate<std::uint8_t>(std::max(n, borderBytes), bytes);
-    ws->rowBorders = reinterpret_cast<std::uint64_t*>(ws->gradient.get());
-    ws->labels = allocate<std::int32_t>(n, bytes);
+    bytes += allocateFrameBuffers(*ws);
     ws->maxPoints = std::min<int>(ws->maxPoints, static_cast<int>(n * sizeof(std::int32_t) / sizeof(ScanPoint)));
-    ws->orderEntries = std::max<std::size_t>(n, graphTableEntries(ws->maxRegions, ws->maxEdges));
-    ws->orderAndPoints = allocate<std::byte>(ws->orderEntries * sizeof(std::int32_t), bytes);
-    ws->pixelOrder = reinterpret_cast<std::int32_t*>(ws->orderAndPoints.get());
-    ws->points = reinterpret_cast<ScanPoint*>(ws->orderAndPoints.get());
-    ws->scratch = allocate<std::int32_t>(scratchEntries(w, h, ws->maxRegions, ws->maxEdges), bytes);
-    ws->regions = allocate<Region>(ws->maxRegions, bytes);
-    ws->edges = allocate<GraphEdge>(ws->maxEdges, bytes);
-    ws->edgeFeatures = allocate<EdgeFeature>(ws->maxEdges, bytes);
-    ws->adjacency = allocate<std::int32_t>(2 * static_cast<std::size_t>(ws->maxEdges), bytes);
     ws->edgeOrder = allocate<std::int32_t>(ws->maxEdges, bytes);
     ws->maxOpen = std::max(16, ws->maxEdges / 2);
     ws->open = allocate<OpenEntry>(ws->maxOpen, bytes);

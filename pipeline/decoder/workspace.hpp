@@ -162,6 +162,12 @@ std::size_t graphTableEntries(std::size_t regions, std::size_t edges);
 // the traversal's seed keys and link pairs (2 entries per edge) and depth's
 // region stripes fit in the graph's share.
 std::size_t scratchEntries(int width, int height, int maxRegions, int maxEdges);
+// Allocates the per-pixel buffers and the graph's (gradient and border masks,
+// labels, the order buffer, scratch, regions, edges, edge features, incidence
+// lists) for ws.width x ws.height pixels, ws.maxRegions and ws.maxEdges,
+// sets orderEntries and the views into them, and returns their bytes: the
+// one sizing that create() and the stage tests share (decoder.cpp).
+std::size_t allocateFrameBuffers(DecoderWorkspace& ws);
 
 // Per symbol code, the expected sign (-1, 0, +1) of each channel:
 // symbolChannel from a table (its base-3 digits are slow to take apart in the

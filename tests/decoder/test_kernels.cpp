@@ -405,13 +405,9 @@ Basins watershedOf(const std::vector<std::uint8_t>& g, int w, int h, int maxRegi
     ws.width = w;
     ws.height = h;
     ws.maxRegions = maxRegions;
-    ws.gradient = std::make_unique<std::uint8_t[]>(n);
+    ws.maxEdges = 3 * maxRegions;
+    allocateFrameBuffers(ws);
     std::copy(g.begin(), g.end(), ws.gradient.get());
-    ws.labels = std::make_unique<std::int32_t[]>(n);
-    ws.orderEntries = n;
-    ws.orderAndPoints = std::make_unique<std::byte[]>(4 * n);
-    ws.pixelOrder = reinterpret_cast<std::int32_t*>(ws.orderAndPoints.get());
-    ws.scratch = std::make_unique<std::int32_t[]>(scratchEntries(w, h, maxRegions, 3 * maxRegions));
     computeWatershed(ws);
     return {std::vector<std::int32_t>(ws.labels.get(), ws.labels.get() + n), ws.regionCount, ws.truncated};
 }
@@ -523,28 +519,17 @@ std::vector<GraphEdge> referenceGraph(const DecoderWorkspace& ws)
     return edges;
 }
 
-// A workspace with just the buffers of the gradient and watershed stages,
-// sized as Decoder::create() sizes them.
+// A workspace with the buffers of the stages up to the graph, sized by
+// Decoder::create()'s own function (allocateFrameBuffers).
 struct FloodCase {
     explicit FloodCase(const cv::Mat& image, int maxRegions)
         : frame(image), ws(StripePattern::generate(40, 4, 8, 7).value(), DecoderParams{})
     {
-        const std::size_t n = static_cast<std::size_t>(image.cols) * image.rows;
         ws.width = image.cols;
         ws.height = image.rows;
         ws.maxRegions = maxRegions;
-        ws.gradient =
-            std::make_unique<std::uint8_t[]>(std::max(n, 8 * static_cast<std::size_t>(borderWords(image.cols)) * image.rows));
-        ws.rowBorders = reinterpret_cast<std::uint64_t*>(ws.gradient.get());
-        ws.labels = std::make_unique<std::int32_t[]>(n);
         ws.maxEdges = 3 * maxRegions;
-        ws.orderEntries = std::max(n, graphTableEntries(maxRegions, ws.maxEdges));
-        ws.orderAndPoints = std::make_unique<std::byte[]>(4 * ws.orderEntries);
-        ws.pixelOrder = reinterpret_cast<std::int32_t*>(ws.orderAndPoints.get());
-        ws.scratch = std::make_unique<std::int32_t[]>(scratchEntries(image.cols, image.rows, maxRegions, ws.maxEdges));
-        ws.regions = std::make_unique<Region[]>(maxRegions);
-        ws.edges = std::make_unique<GraphEdge[]>(ws.maxEdges);
-        ws.adjacency = std::make_unique<std::int32_t[]>(2 * static_cast<std::size_t>(ws.maxEdges));
+        allocateFrameBuffers(ws);
         ws.primary = cv::Vec2f(0.8f, -0.6f);
         ws.colorCorrection = cv::Matx33f(0.9f, 0.08f, 0.02f, 0.1f, 0.8f, 0.1f, 0.03f, 0.12f, 0.85f).inv();
         ws.frame = {image.data, image.cols, image.rows, static_cast<std::ptrdiff_t>(image.step), PixelFormat::Bgr8};
