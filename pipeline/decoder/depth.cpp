@@ -235,10 +235,8 @@ void computePoints(DecoderWorkspace& ws)
                 }
                 for (int j0 = 0; j0 < located; j0 += 4) {
                     Lanes d[5], threshold;
-                    for (int i = 0; i < 4; ++i) {
-                        std::memcpy(&d[i], windows[j0 + i], sizeof(Lanes));
-                        d[4][i] = windows[j0 + i][4];
-                    }
+                    for (int i = 0; i < 4; ++i) std::memcpy(&d[i], windows[j0 + i], sizeof(Lanes));
+                    d[4] = Lanes{windows[j0][4], windows[j0 + 1][4], windows[j0 + 2][4], windows[j0 + 3][4]};
                     std::memcpy(&threshold, &thresholds[j0], sizeof threshold);
                     transpose(d);
                     Lanes g[5];
