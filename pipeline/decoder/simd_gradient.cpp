@@ -113,8 +113,9 @@ void gradientRowReference(const std::uint8_t* up, const std::uint8_t* row, const
     for (int x = 0; x < width; ++x) gradientPixel(up, row, down, width, alongY, x, magnitude, alongCounts);
 }
 
-void gradientRow(const std::uint8_t* up, const std::uint8_t* row, const std::uint8_t* down, int width, bool alongY,
-                 std::uint8_t* magnitude, AlongCounts& alongCounts, [[maybe_unused]] std::int16_t* lanes)
+STRIA_X86_CLONES void gradientRow(const std::uint8_t* up, const std::uint8_t* row, const std::uint8_t* down, int width,
+                                  bool alongY, std::uint8_t* magnitude, AlongCounts& alongCounts,
+                                  [[maybe_unused]] std::int16_t* lanes)
 {
     if (width < 3) {
         gradientRowReference(up, row, down, width, alongY, magnitude, alongCounts);

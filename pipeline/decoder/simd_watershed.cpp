@@ -9,16 +9,6 @@
 #include <arm_neon.h>
 #endif
 
-// x86-64 builds target SSE2; the row sweeps are also compiled for AVX2 and
-// AVX-512 and the loader picks the best the CPU has (an ifunc per kernel):
-// integer lanes, the same results. AVX-512VL's vpternlogd makes the sweeps'
-// carry one instruction per block (see storeWithCarry).
-#if defined(__x86_64__)
-#define STRIA_X86_CLONES __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
-#else
-#define STRIA_X86_CLONES
-#endif
-
 namespace stria::pipeline {
 namespace {
 
