@@ -26,6 +26,10 @@
 #include <cstring>
 #include <limits>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 namespace stria::pipeline {
 namespace {
 
@@ -37,17 +41,41 @@ constexpr std::int32_t kUndecoded = -(1 << 30);
 
 // Four float lanes (GCC vector extensions: SSE2 on x86-64, NEON on ARM).
 using Lanes = float __attribute__((vector_size(16)));
+// Two double lanes (SSE2 / NEON), and two ints.
+using Doubles = double __attribute__((vector_size(16)));
+using Pair = std::int32_t __attribute__((vector_size(8)));
+
+using Index = std::int32_t __attribute__((vector_size(16)));  // a shuffle's lanes
 
 // Rows to columns: v[j][i] = v[i][j] before (the first 4 vectors).
 void transpose(Lanes v[4])
 {
-    using Index = std::int32_t __attribute__((vector_size(16)));
     const Lanes t0 = __builtin_shuffle(v[0], v[1], Index{0, 4, 1, 5}), t1 = __builtin_shuffle(v[2], v[3], Index{0, 4, 1, 5});
     const Lanes t2 = __builtin_shuffle(v[0], v[1], Index{2, 6, 3, 7}), t3 = __builtin_shuffle(v[2], v[3], Index{2, 6, 3, 7});
     v[0] = __builtin_shuffle(t0, t1, Index{0, 1, 4, 5});
     v[1] = __builtin_shuffle(t0, t1, Index{2, 3, 6, 7});
     v[2] = __builtin_shuffle(t2, t3, Index{0, 1, 4, 5});
     v[3] = __builtin_shuffle(t2, t3, Index{2, 3, 6, 7});
+}
+
+// Grid points a[0], a[1] and b[0], b[1] (the two lanes' cell corners in one
+// grid row), widened exactly to double: out = x of [0], y of [0], x of [1],
+// y of [1], each with a in lane 0 and b in lane 1. On SSE2 from two 16-byte
+// loads and shuffles (14 instructions): GCC builds the generic form from
+// 8 scalar loads and conversions (40).
+void cellCorners(const cv::Vec2f* a, const cv::Vec2f* b, Doubles out[4])
+{
+#if defined(__SSE2__)
+    const __m128 pa = _mm_loadu_ps(&a[0][0]), pb = _mm_loadu_ps(&b[0][0]);
+    const __m128 first = _mm_unpacklo_ps(pa, pb), second = _mm_unpackhi_ps(pa, pb);
+    out[0] = _mm_cvtps_pd(first);
+    out[1] = _mm_cvtps_pd(_mm_movehl_ps(first, first));
+    out[2] = _mm_cvtps_pd(second);
+    out[3] = _mm_cvtps_pd(_mm_movehl_ps(second, second));
+#else
+    for (int k = 0; k < 2; ++k)
+        for (int c = 0; c < 2; ++c) out[2 * k + c] = Doubles{a[k][c], b[k][c]};
+#endif
 }
 
 // Camera rays along one image row: a bilinear look-up in the undistorted ray
@@ -67,16 +95,27 @@ public:
         gridRow_ = ws.rayGrid.get() + y0 * ws.rayGridWidth;
     }
 
-    cv::Vec3d at(double u) const
+    // The rays through (u[0], y) and (u[1], y), one per double lane (half
+    // the instructions of one point at a time): xn and yn get their x and y
+    // (z is 1). Per lane, std::min(std::max(gx, 0.0), last) and cv::Vec2d's
+    // bilinear sums in their order: the rays of the scalar form, bit for bit.
+    void at(Doubles u, Doubles& xn, Doubles& yn) const
     {
-        const double gx = std::min(std::max(exactInverse_ ? u * inverseStep_ : u / gridStep_, 0.0), gridWidth_ - 1.000001);
-        const int x0 = static_cast<int>(gx);
-        const double fx = gx - x0;
-        const cv::Vec2f* r = gridRow_ + x0;
-        const cv::Vec2d top = cv::Vec2d(r[0]) * (1 - fx) + cv::Vec2d(r[1]) * fx;
-        const cv::Vec2d bottom = cv::Vec2d(r[gridWidth_]) * (1 - fx) + cv::Vec2d(r[gridWidth_ + 1]) * fx;
-        const cv::Vec2d xn = top * (1 - fy_) + bottom * fy_;
-        return {xn[0], xn[1], 1.0};
+        const Doubles zero{}, last = zero + (gridWidth_ - 1.000001);
+        Doubles gx = exactInverse_ ? u * inverseStep_ : u / gridStep_;
+        gx = gx < zero ? zero : gx;  // std::max(gx, 0.0)
+        gx = last < gx ? last : gx;  // std::min(gx, last)
+        const Pair x0 = __builtin_convertvector(gx, Pair);
+        const Doubles fx = gx - __builtin_convertvector(x0, Doubles);
+        Doubles top[4], bottom[4];
+        cellCorners(gridRow_ + x0[0], gridRow_ + x0[1], top);
+        cellCorners(gridRow_ + x0[0] + gridWidth_, gridRow_ + x0[1] + gridWidth_, bottom);
+        const Doubles topX = top[0] * (1 - fx) + top[2] * fx;
+        const Doubles topY = top[1] * (1 - fx) + top[3] * fx;
+        const Doubles bottomX = bottom[0] * (1 - fx) + bottom[2] * fx;
+        const Doubles bottomY = bottom[1] * (1 - fx) + bottom[3] * fx;
+        xn = topX * (1 - fy_) + bottomX * fy_;
+        yn = topY * (1 - fy_) + bottomY * fy_;
     }
 
 private:
@@ -127,6 +166,8 @@ void computePoints(DecoderWorkspace& ws)
     std::array<const float*, kBatch + 3> windows;  // the centroid's samples in samples[]
     std::array<std::int32_t, kBatch + 3> peaks;
     std::array<float, kBatch + 3> thresholds;
+    std::array<cv::Vec3f, kBatch + 3> positions;  // the points, if valid
+    std::array<std::int64_t, kBatch + 3> intersects;  // all ones if valid
 
     for (int y = 0; y < h; ++y) {
         const std::int32_t* label = labels + static_cast<std::ptrdiff_t>(y) * w;
@@ -232,6 +273,7 @@ void computePoints(DecoderWorkspace& ws)
                     windows[i] = windows[located - 1];
                     thresholds[i] = thresholds[located - 1];
                     peaks[i] = peaks[located - 1];
+                    edges[i] = edges[located - 1];
                 }
                 for (int j0 = 0; j0 < located; j0 += 4) {
                     Lanes d[5], threshold;
@@ -247,18 +289,42 @@ void computePoints(DecoderWorkspace& ws)
                     const Lanes sum = g[0] + g[1] + g[2] + g[3] + g[4];
                     const Lanes moment = g[0] * -2.0f + g[1] * -1.0f + g[2] * 0.0f + g[3] * 1.0f + g[4] * 2.0f;
                     const Lanes offset = moment / sum;
-                    for (int i = 0; i < 4; ++i) columns[j0 + i] = peaks[j0 + i] + 0.5 + offset[i];
+                    // Stored in pairs, as step 5 loads them.
+                    for (int i = 0; i < 4; i += 2) {
+                        const Doubles peak{static_cast<double>(peaks[j0 + i]), static_cast<double>(peaks[j0 + i + 1])};
+                        const Doubles column = peak + 0.5 + Doubles{offset[i], offset[i + 1]};
+                        std::memcpy(&columns[j0 + i], &column, sizeof column);
+                    }
                 }
                 // Step 5: the point where the camera ray through (u, y)
-                // meets the edge's light plane, one per edge and row.
+                // meets the edge's light plane (RigModel::intersectRay's
+                // arithmetic and tests), two edges per double lanes (one
+                // division for two points), then the points kept, one per
+                // edge and row.
+                for (int j = 0; j < located; j += 2) {
+                    Doubles xn, yn, u;
+                    std::memcpy(&u, &columns[j], sizeof u);
+                    rays.at(u, xn, yn);
+                    const Plane &p0 = ws.lightPlanes[edges[j]], &p1 = ws.lightPlanes[edges[j + 1]];
+                    // intersectRay's dot product starts from s = 0: (0 + a) + b
+                    // differs from a + b only in a zero's sign, when the sum
+                    // is zero, which is rejected either way; the z term is n[2] * 1.
+                    const Doubles denom = Doubles{p0.normal[0], p1.normal[0]} * xn +
+                                          Doubles{p0.normal[1], p1.normal[1]} * yn + Doubles{p0.normal[2], p1.normal[2]};
+                    const Doubles t = Doubles{-p0.d, -p1.d} / denom;
+                    // Not parallel (|denom| >= 1e-12) and in front of the camera.
+                    const auto valid = (t > Doubles{}) & ~((denom < 1e-12) & (denom > -1e-12));
+                    const Doubles px = xn * t, py = yn * t;
+                    for (int i = 0; i < 2; ++i)
+                        positions[j + i] =
+                            cv::Vec3f(static_cast<float>(px[i]), static_cast<float>(py[i]), static_cast<float>(t[i]));
+                    std::memcpy(&intersects[j], &valid, sizeof valid);
+                }
                 for (int j = 0; j < located; ++j) {
-                    const double u = columns[j];
+                    if (!intersects[j]) continue;
                     const int edge = edges[j];
-                    const auto point = RigModel::intersectRay(rays.at(u), ws.lightPlanes[edge]);
-                    if (!point) continue;
-                    const ScanPoint scanPoint{cv::Vec3f(static_cast<float>((*point)[0]), static_cast<float>((*point)[1]),
-                                                        static_cast<float>((*point)[2])),
-                                              cv::Point2f(static_cast<float>(u), static_cast<float>(y)), edge};
+                    const ScanPoint scanPoint{positions[j],
+                                              cv::Point2f(static_cast<float>(columns[j]), static_cast<float>(y)), edge};
                     // Along one projector ray the camera depth grows with the
                     // distance from the projector: the smaller z is the lit point.
                     if (const int earlier = rowPoint[edge]; earlier >= 0) {
