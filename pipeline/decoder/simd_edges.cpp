@@ -82,24 +82,22 @@ void windows(const std::uint8_t* row, int width, const std::int32_t* firsts, con
     auto toFloat = [](__m128i int16x4) { return _mm_cvtepi32_ps(_mm_srai_epi32(_mm_unpacklo_epi16(int16x4, int16x4), 16)); };
     for (int j = 0; j < count; ++j) {
         const int first = firsts[j];
-        if (first < 0 || first + kWindowSamples > width - 1) {
+        if (first < 0 || first + kWindowSamples + 2 > width - 1) {
             clippedWindow(row, width, first, rgbOffset, m, weights[j], out[j].data());
             continue;
         }
         const __m128 w0 = _mm_set1_ps(weights[j][0]), w1 = _mm_set1_ps(weights[j][1]), w2 = _mm_set1_ps(weights[j][2]);
-        // 4 samples per step from pixels p .. p + 4: their bytes in two
-        // 8-byte loads (p[0..7], p[7..14]: nothing past the last pixel),
-        // the differences p[j + 3] - p[j] as 12 int16 lanes, and shuffles
-        // pick each channel's 4 (byte j = 3 x sample + channel): 28
-        // instructions instead of 57 for 12 single byte loads per channel.
+        // 4 samples per step from pixels p .. p + 4: the differences
+        // p[j + 3] - p[j] as 12 int16 lanes from two 16-byte loads (p[0..15],
+        // p[3..18]: up to 4 bytes past the window's last pixel, which the
+        // test above keeps inside the row), and shuffles pick each channel's
+        // 4 (byte j = 3 x sample + channel).
         for (int half = 0; half < 2; ++half) {
             const std::uint8_t* p = row + 3 * (first + 4 * half);
-            const __m128i a = _mm_unpacklo_epi8(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(p)), zero);
-            const __m128i bb = _mm_unpacklo_epi8(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(p + 7)), zero);
-            // p[3..10]: a's lanes 3..7, then bb's 1..3 (lane 4 gets p[7] from both).
-            const __m128i shifted = _mm_or_si128(_mm_srli_si128(a, 6), _mm_slli_si128(bb, 8));
-            const __m128i low = _mm_sub_epi16(shifted, a);                                       // j = 0..7
-            const __m128i high = _mm_sub_epi16(_mm_srli_si128(bb, 8), _mm_srli_si128(bb, 2));  // j = 8..11
+            const __m128i a = _mm_loadu_si128(reinterpret_cast<const __m128i*>(p));
+            const __m128i b = _mm_loadu_si128(reinterpret_cast<const __m128i*>(p + 3));
+            const __m128i low = _mm_sub_epi16(_mm_unpacklo_epi8(b, zero), _mm_unpacklo_epi8(a, zero));   // j = 0..7
+            const __m128i high = _mm_sub_epi16(_mm_unpackhi_epi8(b, zero), _mm_unpackhi_epi8(a, zero));  // j = 8..15
             const __m128 d0 = toFloat(low), d1 = toFloat(_mm_srli_si128(low, 8)), d2 = toFloat(high);
             // Byte b of each pixel: j = b, b + 3, b + 6, b + 9.
             const __m128 byte0 = _mm_shuffle_ps(d0, _mm_shuffle_ps(d1, d2, _MM_SHUFFLE(0, 1, 0, 2)), _MM_SHUFFLE(2, 0, 3, 0));
