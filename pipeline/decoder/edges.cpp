@@ -150,9 +150,11 @@ float symbolError(const EqualizedChange& change, SymbolCode symbol, float t)
     return symbolError(change, symbol, MatchScales(t));
 }
 
-float symbolError(const EqualizedChange& change, SymbolCode symbol, const MatchScales& scales)
+namespace {
+
+float symbolError(const std::array<float, 3>& change, float relative, SymbolCode symbol, const MatchScales& scales)
 {
-    const Lanes c = lanesOf(change.c);
+    const Lanes c = lanesOf(change);
     const SymbolTerms& terms = kSymbolTerms[symbol];
     // The common change, estimated from the channels the symbol keeps
     // constant, else as the midpoint of the rising and the falling ones; a
@@ -173,7 +175,7 @@ float symbolError(const EqualizedChange& change, SymbolCode symbol, const MatchS
     // scalar forms to branches, and whether a common change is clamped is
     // data).
     const Lanes bound =
-        change.relative > 0 ? lesserOf(lanesOf(kMaxAlbedoChange / change.relative), lanesOf(kMaxCommonShare)) : Lanes{};
+        relative > 0 ? lesserOf(lanesOf(kMaxAlbedoChange / relative), lanesOf(kMaxCommonShare)) : Lanes{};
     const Lanes common = greaterOf(-bound, lesserOf(bound, lanesOf(unclamped)));
     // Without a common change c is matched as it is (subtracting a zero and
     // dividing by 1 leave it so, up to the sign of zeros, which the match
@@ -183,6 +185,18 @@ float symbolError(const EqualizedChange& change, SymbolCode symbol, const MatchS
     // A select, not a branch: whether a common change is removed is data.
     const Lanes divisor = select((common != 0) & (norm > 0), norm, lanesOf(1.0f));
     return scaledMatchError(corrected / divisor, terms, scales.on, scales.off);
+}
+
+}  // namespace
+
+float symbolError(const EqualizedChange& change, SymbolCode symbol, const MatchScales& scales)
+{
+    return symbolError(change.c, change.relative, symbol, scales);
+}
+
+float symbolError(const EdgeChange& change, SymbolCode symbolFromA, const MatchScales& scales)
+{
+    return symbolError(change.c, change.relative, symbolFromA, scales);
 }
 
 SymbolCode optimalSymbol(const std::array<float, 3>& c, float t)
@@ -236,6 +250,8 @@ struct SymbolLanes {
     LaneMask symbol;    // optimalSymbol
     Lanes bestMatch;    // its symbolError
     Lanes rawChange[3]; // |to - from| per channel (eq. 1)
+    Lanes change[3];    // equalizedChange's c
+    Lanes relative;     // and its relative
 };
 
 // Eq. 3-7 from colour from to colour to (R G B lanes).
@@ -252,6 +268,8 @@ SymbolLanes bestSymbolLanes(const Lanes from[3], const Lanes to[3], float t, con
     out.weight = largestOf(out.rawChange[0], out.rawChange[1], out.rawChange[2]);
     const Lanes relative = largestOf(absolute(c[0]), absolute(c[1]), absolute(c[2]));
     for (Lanes& v : c) v = select(relative > 0, v / relative, v);
+    for (int ch = 0; ch < 3; ++ch) out.change[ch] = c[ch];
+    out.relative = relative;
     // The optimal symbol's signs, (c >= t) - (c <= -t), and the channels
     // falling, constant and rising from those masks (-1 where true).
     LaneMask sign[3], count[3] = {};  // count: falling, constant, rising
@@ -354,12 +372,15 @@ void computeEdgeFeatures(DecoderWorkspace& ws)
                             symbols.weight, (Lanes)(across & (LaneMask)symbols.bestMatch),
                             (Lanes)(across & (LaneMask)gradientError)};
         transpose(feature);
+        Lanes equalized[4] = {symbols.change[0], symbols.change[1], symbols.change[2], symbols.relative};
+        transpose(equalized);
         Lanes change[4] = {symbols.rawChange[0], symbols.rawChange[1], symbols.rawChange[2],
                            lanesOf(-std::numeric_limits<float>::infinity())};
         transpose(change);
         static_assert(sizeof(EdgeFeature) == sizeof(Lanes) && offsetof(Region, centroidX) == offsetof(Region, range) + 12);
         for (int i = 0; i < n; ++i) {
             std::memcpy(static_cast<void*>(&ws.edgeFeatures[e0 + i]), &feature[i], sizeof(EdgeFeature));
+            std::memcpy(static_cast<void*>(&ws.edgeChanges[e0 + i]), &equalized[i], sizeof(EdgeChange));
             // std::max(range, change) per channel, on the 16 bytes from
             // range[0]: the fourth lane is centroidX, which the maximum with
             // -infinity leaves as it is.

@@ -138,7 +138,7 @@ private:
     {
         const float match = bestSymbolFrom(edge, from, to) == symbol
                                 ? edge.bestMatch
-                                : symbolError(equalizedChange(ws_, from, to), symbol, scales_);
+                                : symbolError(ws_.edgeChanges[&edge - features_], from < to ? symbol : reversedSymbol(symbol), scales_);
         if (positionError) *positionError = beta_ * match / std::max(edge.weight, 1.0f) + edge.gradientError;
         return match + alpha_ * edge.gradientError;
     }
@@ -246,10 +246,11 @@ private:
                     // others' errors all evaluated before any is compared, so
                     // that their chains of divisions overlap.
                     const SymbolCode best = bestSymbolFrom(edge, endRegion, next);
-                    const EqualizedChange change = equalizedChange(ws_, endRegion, next);
+                    const EdgeChange& change = ws_.edgeChanges[ws_.adjacency[r.adjacencyBegin + i]];
+                    const bool fromA = endRegion < next;
                     std::array<float, kSymbolCount> errors;
                     for (int k = 0; k < neededCount; ++k)
-                        errors[k] = (needed[k] == best ? edge.bestMatch : symbolError(change, needed[k], scales_)) +
+                        errors[k] = (needed[k] == best ? edge.bestMatch : symbolError(change, fromA ? needed[k] : reversedSymbol(needed[k]), scales_)) +
                                     alpha_ * edge.gradientError;
                     for (int k = 0; k < neededCount; ++k) {
                         if (errors[k] < bestError) {

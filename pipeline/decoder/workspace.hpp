@@ -112,6 +112,10 @@ struct DecoderWorkspace {
     std::size_t orderEntries = 0;  // its size in int32 entries: max(pixels, graphTableEntries)
     std::int32_t* pixelOrder = nullptr;
     ScanPoint* points = nullptr;
+    // Also in the order buffer, from the edge stage until depth: each edge's
+    // equalised change from a to b (edges.cpp), which the traversal's symbol
+    // tests read instead of computing it again (orderEntries >= 4 maxEdges).
+    struct EdgeChange* edgeChanges = nullptr;
     // Gradient row lanes, watershed descent codes, region sums, the graph
     // edges' label pairs, then the traversal's seed sort keys and links, then the depth
     // stage's region stripes.
@@ -213,5 +217,16 @@ struct MatchScales {
     float on, off;
 };
 float symbolError(const EqualizedChange& change, SymbolCode symbol, const MatchScales& scales);
+// An edge's equalised change from a to b (DecoderWorkspace::edgeChanges).
+struct EdgeChange {
+    std::array<float, 3> c{};
+    float relative = 0;
+};
+// symbolError(equalizedChange(ws, from, to), symbol, scales) for the edge
+// whose change from a to b is `change`, given symbolFromA = symbol if from
+// is a, else reversedSymbol(symbol): the same float (from b the change is
+// the negated one, up to the sign of zeros, which symbolError does not see,
+// and the reversed symbol's arithmetic on it is negated step for step).
+float symbolError(const EdgeChange& change, SymbolCode symbolFromA, const MatchScales& scales);
 
 }  // namespace stria::pipeline

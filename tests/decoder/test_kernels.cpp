@@ -731,8 +731,9 @@ TEST(DecoderKernels, EdgeSymbolErrorsMatchThePerChannelLoopsBitwise)
 }
 
 // The edge stage (edges.cpp: 4 edges per step in vector lanes) against the
-// one-edge functions the traversal calls, and the direction test of fig. 5,
-// edge by edge: every feature and range bitwise.
+// one-edge functions, and the direction test of fig. 5, edge by edge: every
+// feature, range and stored change bitwise, and the traversal's symbol errors
+// from the stored change equal to those from equalizedChange both ways.
 TEST(DecoderKernels, EdgeStageMatchesTheOneEdgeFunctionsBitwise)
 {
     DecoderWorkspace ws(StripePattern::generate(40, 4, 8, 7).value(), DecoderParams{});
@@ -740,6 +741,8 @@ TEST(DecoderKernels, EdgeStageMatchesTheOneEdgeFunctionsBitwise)
     ws.regions = std::make_unique<Region[]>(kRegions);
     ws.edges = std::make_unique<GraphEdge[]>(kEdges);
     ws.edgeFeatures = std::make_unique<EdgeFeature[]>(kEdges);
+    std::vector<EdgeChange> edgeChanges(kEdges);
+    ws.edgeChanges = edgeChanges.data();
     ws.edgeCount = kEdges;
     ws.primary = cv::Vec2f(0.8f, -0.6f);
     std::mt19937 random(11);
@@ -767,7 +770,7 @@ TEST(DecoderKernels, EdgeStageMatchesTheOneEdgeFunctionsBitwise)
 
     const float t = static_cast<float>(ws.params.t);
     std::vector<std::array<float, 3>> ranges(kRegions);
-    int differing = 0, across = 0, ragged = 0;
+    int differing = 0, across = 0, ragged = 0, symbolErrors = 0;
     for (int e = 0; e < kEdges; ++e) {
         const GraphEdge& edge = ws.edges[e];
         const Region &a = ws.regions[edge.a], &b = ws.regions[edge.b];
@@ -799,9 +802,23 @@ TEST(DecoderKernels, EdgeStageMatchesTheOneEdgeFunctionsBitwise)
             ++across;
         }
         differing += std::memcmp(&expected, &ws.edgeFeatures[e], sizeof expected) != 0;
+        // The stored change, and the traversal's symbol errors from it, both ways along the edge.
+        const EdgeChange& stored = ws.edgeChanges[e];
+        differing += std::memcmp(&stored.c, &change.c, sizeof change.c) != 0 ||
+                     std::bit_cast<std::uint32_t>(stored.relative) != std::bit_cast<std::uint32_t>(change.relative);
+        const MatchScales scales(t);
+        const EqualizedChange backward = equalizedChange(ws, edge.b, edge.a);
+        for (int s = 0; s < kSymbolCount; ++s) {
+            const auto symbol = static_cast<SymbolCode>(s);
+            const auto bits = [](float v) { return std::bit_cast<std::uint32_t>(v); };
+            symbolErrors += 2;
+            differing += bits(symbolError(stored, symbol, scales)) != bits(symbolError(change, symbol, scales));
+            differing += bits(symbolError(stored, reversedSymbol(symbol), scales)) != bits(symbolError(backward, symbol, scales));
+        }
     }
     for (int r = 0; r < kRegions; ++r) differing += std::memcmp(&ranges[r], &ws.regions[r].range, sizeof ranges[r]) != 0;
-    EXPECT_EQ(differing, 0) << "of " << kEdges << " edges and " << kRegions << " regions";
+    EXPECT_EQ(differing, 0) << "of " << kEdges << " edges, " << kRegions << " regions and " << symbolErrors
+                            << " symbol errors";
     // Both directions and both ways to them are exercised.
     EXPECT_GT(across, kEdges / 4);
     EXPECT_LT(across, kEdges * 3 / 4);
