@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <bit>
 #include <cstring>
+#include <utility>
 
 #if defined(__ARM_NEON)
 #include <arm_neon.h>
@@ -82,39 +83,86 @@ namespace {
 constexpr std::uint8_t kArrowBits = 0xff & ~kPlateauArrow & ~kMinimumArrow;
 
 // Four labels or lane masks, in GCC's vector extensions: one source for the
-// SSE2 and NEON instructions (shuffles, compares, and/or).
+// SSE2 and NEON instructions (shuffles, compares, and/or). The x86-64-v3/v4
+// versions of the sweeps take eight (Lanes8, below): a block's prefix scan
+// in 3 steps instead of 2, but half the blocks, so half the steps of the
+// carry chain per row.
 using Lanes = std::int32_t __attribute__((vector_size(16)));
 
-inline Lanes load(const std::int32_t* p)
+// The helpers below take and return 8-lane vectors too: GCC warns that their
+// ABI differs without AVX, but they are always inlined, into the AVX2/AVX-512
+// versions only (file-local, never called through the ABI).
+#pragma GCC diagnostic ignored "-Wpsabi"
+
+template <typename V>
+constexpr int kLanes = sizeof(V) / sizeof(std::int32_t);
+
+template <typename V>
+[[gnu::always_inline]] inline V load(const std::int32_t* p)
 {
-    Lanes v;
+    V v;
     std::memcpy(&v, p, sizeof v);
     return v;
 }
 
-inline void store(std::int32_t* p, Lanes v) { std::memcpy(p, &v, sizeof v); }
+template <typename V>
+[[gnu::always_inline]] inline void store(std::int32_t* p, V v) { std::memcpy(p, &v, sizeof v); }
 
 // a in the lanes of mask m (-1), else b. (The vector ternary would compare m
 // with 0 first.)
-inline Lanes select(Lanes m, Lanes a, Lanes b) { return (a & m) | (b & ~m); }
+template <typename V>
+[[gnu::always_inline]] inline V select(V m, V a, V b) { return (a & m) | (b & ~m); }
 
-// The 4 codes of a block in each lane (byte k = pixel k): lane k's byte k is
-// pixel k's code, so one and-compare per direction gives the lane masks,
-// without widening the bytes.
-inline Lanes codesOf(const std::uint8_t* code)
+// Shuffle indices: lane i takes lane i - shift (i + shift when shift < 0),
+// itself where that is outside the block; or `lane` in every lane.
+template <typename V, int... i>
+consteval V shifted(int shift, std::integer_sequence<int, i...>)
+{
+    return V{(i - shift >= 0 && i - shift < kLanes<V> ? i - shift : i)...};
+}
+
+template <typename V>
+consteval V shifted(int shift)
+{
+    return shifted<V>(shift, std::make_integer_sequence<int, kLanes<V>>());
+}
+
+template <typename V, int... i>
+consteval V everyLane(int lane, std::integer_sequence<int, i...>)
+{
+    return V{(static_cast<void>(i), lane)...};
+}
+
+template <typename V>
+consteval V everyLane(int lane)
+{
+    return everyLane<V>(lane, std::make_integer_sequence<int, kLanes<V>>());
+}
+
+// The codes of a block of 4 in each lane (byte k = pixel k, the next 4 in
+// the next 4 lanes): lane k's byte k % 4 is pixel k's code, so one
+// and-compare per direction gives the lane masks, without widening the bytes.
+template <typename V>
+[[gnu::always_inline]] inline V codesOf(const std::uint8_t* code)
 {
     static_assert(std::endian::native == std::endian::little, "byte k of the word is pixel k");
-    std::int32_t c;
-    std::memcpy(&c, code, sizeof c);
-    return Lanes{c, c, c, c};
+    V v;
+    for (int i = 0; i < kLanes<V>; i += 4) {
+        std::int32_t c;
+        std::memcpy(&c, code + i, sizeof c);
+        for (int k = 0; k < 4; ++k) v[i + k] = c;
+    }
+    return v;
 }
 
 // -1 in the lanes whose code has an arrow in the direction, else 0.
-inline Lanes arrowsIn(Lanes codes, std::uint8_t direction)
+template <typename V>
+[[gnu::always_inline]] inline V arrowsIn(V codes, std::uint8_t direction)
 {
     constexpr auto byteK = [](std::uint32_t value) {
-        return Lanes{static_cast<std::int32_t>(value), static_cast<std::int32_t>(value << 8),
-                     static_cast<std::int32_t>(value << 16), static_cast<std::int32_t>(value << 24)};
+        V v{};
+        for (int i = 0; i < kLanes<V>; ++i) v[i] = static_cast<std::int32_t>(value << (8 * (i % 4)));
+        return v;
     };
     return (codes & byteK(kArrowBits)) == byteK(direction);
 }
@@ -123,15 +171,15 @@ inline Lanes arrowsIn(Lanes codes, std::uint8_t direction)
 // takes, lane `last` of the stored block in every lane. The chain from block
 // to block is this carry alone. On x86-64 it is (carry & m's last lane) |
 // (own's last lane), the broadcasts off the chain: one vpternlogd in the
-// AVX-512 clone (watershed 1.37 -> 1.21 ms at 780x580), where a select then
+// AVX-512 version (watershed 1.37 -> 1.21 ms at 780x580), where a select then
 // a broadcast took 3 dependent instructions. On ARM a vbsl then a dup, 4
 // instructions fewer per block than the and-or.
-template <int last>
-inline Lanes storeWithCarry(std::int32_t* out, Lanes m, Lanes v, Lanes carry)
+template <int last, typename V>
+[[gnu::always_inline]] inline V storeWithCarry(std::int32_t* out, V m, V v, V carry)
 {
-    constexpr Lanes lastLane{last, last, last, last};
+    constexpr V lastLane = everyLane<V>(last);
 #if defined(__x86_64__)
-    const Lanes own = v & ~m;
+    const V own = v & ~m;
     store(out, own | (carry & m));
     return (carry & __builtin_shuffle(m, lastLane)) | __builtin_shuffle(own, lastLane);
 #else
@@ -140,6 +188,109 @@ inline Lanes storeWithCarry(std::int32_t* out, Lanes m, Lanes v, Lanes carry)
     return __builtin_shuffle(v, lastLane);
 #endif
 }
+
+// One step of a block's prefix scan: lane i takes lane i - shift's label
+// (i + |shift| when shift < 0) while its mask is set, and keeps its mask
+// only if that lane's was set too.
+template <int shift, typename V>
+[[gnu::always_inline]] inline void scanStep(V& v, V& m)
+{
+    constexpr V index = shifted<V>(shift);
+    v = select(m, __builtin_shuffle(v, index), v);
+    m &= __builtin_shuffle(m, index);
+}
+
+// A pixel copying its neighbour's label after the neighbour's own copy is a
+// serial chain: as selects per pixel, 3 dependent instructions each. Here a
+// block resolves its runs by a prefix scan in log2(lanes) shuffle steps (lane
+// i takes lane i - 1, then i - 2, ..., while its mask is set), and only the
+// lanes that copy from beyond the block (their mask still set) take the
+// previous block's label (storeWithCarry).
+template <typename V>
+[[gnu::always_inline]] inline void upLeftLanes(const std::uint8_t* code, const std::int32_t* above, std::int32_t* row,
+                                               int width)
+{
+    constexpr int n = kLanes<V>;
+    const int blocks = width & ~(n - 1);
+    V carry = V{} + kUnresolved;  // the label left of the block, in every lane
+    for (int x = 0; x < blocks; x += n) {
+        const V codes = codesOf<V>(code + x);
+        V v = select(arrowsIn(codes, kDescentUp), load<V>(above + x), load<V>(row + x));
+        V m = arrowsIn(codes, kDescentLeft);
+        scanStep<1>(v, m);
+        scanStep<2>(v, m);
+        if constexpr (n == 8) scanStep<4>(v, m);
+        carry = storeWithCarry<n - 1>(row + x, m, v, carry);
+    }
+    std::int32_t previous = carry[0];
+    for (int x = blocks; x < width; ++x) {
+        if ((code[x] & kArrowBits) == kDescentUp) row[x] = above[x];
+        if ((code[x] & kArrowBits) == kDescentLeft) row[x] = previous;
+        previous = row[x];
+    }
+}
+
+// The same from the right (the tail first), lanes mirrored. (Written out
+// twice on purpose: one always_inline scan for both directions, with the
+// shuffle masks as arguments, cost 3 % more instructions in this kernel.)
+template <typename V>
+[[gnu::always_inline]] inline void sweepLanes(const std::uint8_t* code, const std::int32_t* above, std::int32_t* row,
+                                              int width)
+{
+    upLeftLanes<V>(code, above, row, width);
+    constexpr int n = kLanes<V>;
+    const int blocks = width & ~(n - 1);
+    std::int32_t next = kUnresolved;
+    for (int x = width - 1; x >= blocks; --x) {
+        if ((code[x] & kArrowBits) == kDescentRight) row[x] = next;
+        next = row[x];
+    }
+    V carry = V{} + next;
+    for (int x = blocks - n; x >= 0; x -= n) {
+        V v = load<V>(row + x);
+        V m = arrowsIn(codesOf<V>(code + x), kDescentRight);
+        scanStep<-1>(v, m);
+        scanStep<-2>(v, m);
+        if constexpr (n == 8) scanStep<-4>(v, m);
+        carry = storeWithCarry<0>(row + x, m, v, carry);
+    }
+}
+
+#if defined(__x86_64__)
+// x86-64: 4 lanes in SSE2, 8 in the AVX2 and AVX-512 versions (picked at run
+// time by GCC's function multiversioning, an ifunc each; target_clones cannot
+// give its clones different bodies).
+using Lanes8 = std::int32_t __attribute__((vector_size(32)));
+
+[[gnu::target("default")]] void upLeftVersion(const std::uint8_t* c, const std::int32_t* a, std::int32_t* r, int w)
+{
+    upLeftLanes<Lanes>(c, a, r, w);
+}
+[[gnu::target("arch=x86-64-v3")]] void upLeftVersion(const std::uint8_t* c, const std::int32_t* a, std::int32_t* r,
+                                                      int w)
+{
+    upLeftLanes<Lanes8>(c, a, r, w);
+}
+[[gnu::target("arch=x86-64-v4")]] void upLeftVersion(const std::uint8_t* c, const std::int32_t* a, std::int32_t* r,
+                                                      int w)
+{
+    upLeftLanes<Lanes8>(c, a, r, w);
+}
+[[gnu::target("default")]] void sweepVersion(const std::uint8_t* c, const std::int32_t* a, std::int32_t* r, int w)
+{
+    sweepLanes<Lanes>(c, a, r, w);
+}
+[[gnu::target("arch=x86-64-v3")]] void sweepVersion(const std::uint8_t* c, const std::int32_t* a, std::int32_t* r,
+                                                     int w)
+{
+    sweepLanes<Lanes8>(c, a, r, w);
+}
+[[gnu::target("arch=x86-64-v4")]] void sweepVersion(const std::uint8_t* c, const std::int32_t* a, std::int32_t* r,
+                                                     int w)
+{
+    sweepLanes<Lanes8>(c, a, r, w);
+}
+#endif
 
 }  // namespace
 
@@ -158,57 +309,22 @@ void sweepRowReference(const std::uint8_t* code, const std::int32_t* above, std:
         if ((code[x] & kArrowBits) == kDescentRight) row[x] = x + 1 < width ? row[x + 1] : kUnresolved;
 }
 
-STRIA_X86_CLONES void sweepRowUpLeft(const std::uint8_t* code, const std::int32_t* above, std::int32_t* row, int width)
+void sweepRowUpLeft(const std::uint8_t* code, const std::int32_t* above, std::int32_t* row, int width)
 {
-    // A pixel copying its neighbour's label after the neighbour's own copy is
-    // a serial chain: as selects per pixel, 3 dependent instructions each.
-    // Here a block of 4 resolves its runs by a prefix scan in 2 shuffle
-    // steps (lane i takes lane i - 1, then i - 2, while its mask is set), and
-    // only the lanes that copy from beyond the block (their mask still set)
-    // take the previous block's label (storeWithCarry).
-    const int blocks = width & ~3;
-    const Lanes outside{kUnresolved, kUnresolved, kUnresolved, kUnresolved};
-    Lanes carry = outside;  // the label left of the block, in every lane
-    for (int x = 0; x < blocks; x += 4) {
-        const Lanes codes = codesOf(code + x);
-        Lanes v = select(arrowsIn(codes, kDescentUp), load(above + x), load(row + x));
-        Lanes m = arrowsIn(codes, kDescentLeft);
-        v = select(m, __builtin_shuffle(v, Lanes{0, 0, 1, 2}), v);
-        m &= __builtin_shuffle(m, Lanes{0, 0, 1, 2});
-        v = select(m, __builtin_shuffle(v, Lanes{0, 1, 0, 1}), v);
-        m &= __builtin_shuffle(m, Lanes{0, 1, 0, 1});
-        carry = storeWithCarry<3>(row + x, m, v, carry);
-    }
-    std::int32_t previous = carry[0];
-    for (int x = blocks; x < width; ++x) {
-        if ((code[x] & kArrowBits) == kDescentUp) row[x] = above[x];
-        if ((code[x] & kArrowBits) == kDescentLeft) row[x] = previous;
-        previous = row[x];
-    }
+#if defined(__x86_64__)
+    upLeftVersion(code, above, row, width);
+#else
+    upLeftLanes<Lanes>(code, above, row, width);
+#endif
 }
 
-STRIA_X86_CLONES void sweepRow(const std::uint8_t* code, const std::int32_t* above, std::int32_t* row, int width)
+void sweepRow(const std::uint8_t* code, const std::int32_t* above, std::int32_t* row, int width)
 {
-    sweepRowUpLeft(code, above, row, width);
-    const int blocks = width & ~3;
-    // The same from the right (the tail first), lanes mirrored. (Written out
-    // twice on purpose: one always_inline scan for both directions, with the
-    // shuffle masks as arguments, cost 3 % more instructions in this kernel.)
-    std::int32_t next = kUnresolved;
-    for (int x = width - 1; x >= blocks; --x) {
-        if ((code[x] & kArrowBits) == kDescentRight) row[x] = next;
-        next = row[x];
-    }
-    Lanes carry{next, next, next, next};
-    for (int x = blocks - 4; x >= 0; x -= 4) {
-        Lanes v = load(row + x);
-        Lanes m = arrowsIn(codesOf(code + x), kDescentRight);
-        v = select(m, __builtin_shuffle(v, Lanes{1, 2, 3, 3}), v);
-        m &= __builtin_shuffle(m, Lanes{1, 2, 3, 3});
-        v = select(m, __builtin_shuffle(v, Lanes{2, 3, 2, 3}), v);
-        m &= __builtin_shuffle(m, Lanes{2, 3, 2, 3});
-        carry = storeWithCarry<0>(row + x, m, v, carry);
-    }
+#if defined(__x86_64__)
+    sweepVersion(code, above, row, width);
+#else
+    sweepLanes<Lanes>(code, above, row, width);
+#endif
 }
 
 }  // namespace stria::pipeline
