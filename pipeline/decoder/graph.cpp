@@ -8,6 +8,7 @@
 // direction (across the stripes) and the secondary one (along them) for eq. 8.
 // Edges are found through a hash table of label pairs, then laid out as
 // compressed incidence lists for the traversal.
+#include "pipeline/decoder/simd_graph.hpp"
 #include "pipeline/decoder/workspace.hpp"
 
 #include <algorithm>
@@ -145,13 +146,13 @@ void buildGraph(DecoderWorkspace& ws)
         const std::uint8_t* down = ws.frame.row(std::min(y + 1, h - 1));
         forEachBit(ws.rowBorders + static_cast<std::ptrdiff_t>(y) * borderWords(w), w - 1, [&](int x) {
             addPair(row[x], row[x + 1], true,
-                    x + 2 < w ? horizontalPairGradient(up, pixels, down, x, ws.primary)
+                    x + 2 < w ? graph_kernels::horizontalPair(up, pixels, down, x, ws.primary)
                               : pairGradient(ws.frame, x, y, true, ws.primary));
         });
         if (y + 1 < h)
             forEachBorder(row, row + w, w, [&](int x) {
                 addPair(row[x], row[x + w], false,
-                        x > 0 && x + 2 < w ? verticalPairGradient(pixels, down, x, ws.primary)
+                        x > 0 && x + 2 < w ? graph_kernels::verticalPair(pixels, down, x, ws.primary)
                                            : pairGradient(ws.frame, x, y, false, ws.primary));
             });
     }
