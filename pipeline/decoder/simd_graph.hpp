@@ -62,9 +62,9 @@ inline PairGradient pairTerms(Floats gx, Floats gy, const cv::Vec2f& primary)
     // (0 + a = a for a >= +0).
     const __m128 low = _mm_unpacklo_ps(along, across), high = _mm_unpackhi_ps(along, across);
     const __m128 sum = _mm_add_ps(_mm_add_ps(low, _mm_movehl_ps(low, low)), high);
-    PairGradient out;
-    _mm_storel_pi(reinterpret_cast<__m64*>(&out), sum);
-    return out;
+    // Out of the register lane by lane: a 64-bit store and a 32-bit reload
+    // of its upper half (the edge's update) stalled on store forwarding.
+    return {_mm_cvtss_f32(sum), _mm_cvtss_f32(_mm_shuffle_ps(sum, sum, _MM_SHUFFLE(1, 1, 1, 1)))};
 }
 #endif
 
