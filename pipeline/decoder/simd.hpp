@@ -12,14 +12,17 @@
 #include <cstdint>
 #include <limits>
 
-// x86-64 builds target SSE2; the hottest kernels (STRIA_X86_CLONES on their
-// definitions) are also compiled for x86-64-v3 (AVX2) and -v4 (AVX-512), and
-// the loader picks the best the CPU has (an ifunc per kernel). Integer lanes:
-// the same results on each. The AVX-512 clones' one-instruction selects
-// (vpternlogd) and three-operand forms, 780x580 stage medians: watershed
-// sweeps 1.33 -> 1.21 ms (with the carry of storeWithCarry), gradient 0.44
-// -> 0.42 (the region medians: no faster). tests/decoder runs the kernel
-// tests again under qemu-x86_64 on CPUs without AVX-512 and without AVX.
+// x86-64 builds target SSE2; the hottest kernels are also compiled for
+// x86-64-v3 (AVX2) and -v4 (AVX-512), and the loader picks the best the CPU
+// has (an ifunc per kernel): gradientRow as clones of one body
+// (STRIA_X86_CLONES on its definition), the watershed sweeps as one
+// definition per target (simd_watershed.cpp: their AVX bodies take 8 labels
+// per block, not 4). Integer lanes: the same results on each. 780x580 stage
+// medians: watershed 1.33 -> 1.21 ms by the AVX-512 clones' one-instruction
+// selects (vpternlogd) with the carry of storeWithCarry, then -0.03-0.05 ms
+// by the 8-label blocks; gradient 0.44 -> 0.42 (the region medians: no
+// faster). tests/decoder runs the kernel tests again under qemu-x86_64 on
+// CPUs without AVX-512 and without AVX (the AVX2 and SSE2 versions).
 #if defined(__x86_64__)
 #define STRIA_X86_CLONES __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
 #else
