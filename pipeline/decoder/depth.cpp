@@ -45,19 +45,6 @@ using Lanes = float __attribute__((vector_size(16)));
 using Doubles = double __attribute__((vector_size(16)));
 using Pair = std::int32_t __attribute__((vector_size(8)));
 
-using Index = std::int32_t __attribute__((vector_size(16)));  // a shuffle's lanes
-
-// Rows to columns: v[j][i] = v[i][j] before (the first 4 vectors).
-void transpose(Lanes v[4])
-{
-    const Lanes t0 = __builtin_shuffle(v[0], v[1], Index{0, 4, 1, 5}), t1 = __builtin_shuffle(v[2], v[3], Index{0, 4, 1, 5});
-    const Lanes t2 = __builtin_shuffle(v[0], v[1], Index{2, 6, 3, 7}), t3 = __builtin_shuffle(v[2], v[3], Index{2, 6, 3, 7});
-    v[0] = __builtin_shuffle(t0, t1, Index{0, 1, 4, 5});
-    v[1] = __builtin_shuffle(t0, t1, Index{2, 3, 6, 7});
-    v[2] = __builtin_shuffle(t2, t3, Index{0, 1, 4, 5});
-    v[3] = __builtin_shuffle(t2, t3, Index{2, 3, 6, 7});
-}
-
 // Grid points a[0], a[1] and b[0], b[1] (the two lanes' cell corners in one
 // grid row), widened exactly to double: out = x of [0], y of [0], x of [1],
 // y of [1], each with a in lane 0 and b in lane 1. On SSE2 from two 16-byte
@@ -280,7 +267,7 @@ void computePoints(DecoderWorkspace& ws)
                     for (int i = 0; i < 4; ++i) std::memcpy(&d[i], windows[j0 + i], sizeof(Lanes));
                     d[4] = Lanes{windows[j0][4], windows[j0 + 1][4], windows[j0 + 2][4], windows[j0 + 3][4]};
                     std::memcpy(&threshold, &thresholds[j0], sizeof threshold);
-                    transpose(d);
+                    transpose4(d);
                     Lanes g[5];
                     for (int k = 0; k < 5; ++k) {
                         d[k] -= threshold;

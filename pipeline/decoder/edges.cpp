@@ -18,6 +18,7 @@
 // edges below t (photo albedo at contrast 0.3: inliers 33% -> 42%). The mean
 // of the two regions is symmetric, so an edge gets the same symbol (reversed)
 // from either side.
+#include "pipeline/decoder/simd.hpp"
 #include "pipeline/decoder/workspace.hpp"
 
 #include <algorithm>
@@ -217,17 +218,6 @@ namespace {
 // waiting, and the maxima over the channels are maxima of vectors.
 constexpr int kBlock = 4;
 
-void transpose(Lanes v[4])  // rows to columns: v[j][i] = v[i][j] before
-{
-    using Index = LaneMask;
-    const Lanes t0 = __builtin_shuffle(v[0], v[1], Index{0, 4, 1, 5}), t1 = __builtin_shuffle(v[2], v[3], Index{0, 4, 1, 5});
-    const Lanes t2 = __builtin_shuffle(v[0], v[1], Index{2, 6, 3, 7}), t3 = __builtin_shuffle(v[2], v[3], Index{2, 6, 3, 7});
-    v[0] = __builtin_shuffle(t0, t1, Index{0, 1, 4, 5});
-    v[1] = __builtin_shuffle(t0, t1, Index{2, 3, 6, 7});
-    v[2] = __builtin_shuffle(t2, t3, Index{0, 1, 4, 5});
-    v[3] = __builtin_shuffle(t2, t3, Index{2, 3, 6, 7});
-}
-
 Lanes floatsOf(LaneMask v) { return __builtin_convertvector(v, Lanes); }
 // std::max({x, y, z}) per lane: the first of the largest.
 Lanes largestOf(Lanes x, Lanes y, Lanes z) { return greaterOf(z, greaterOf(y, x)); }
@@ -343,7 +333,7 @@ void computeEdgeFeatures(DecoderWorkspace& ws)
             std::memcpy(&border[i], &edge[i]->borderCount, sizeof(Lanes));
         }
         static_assert(offsetof(GraphEdge, secondaryGradient) - offsetof(GraphEdge, borderCount) == 12);
-        for (Lanes* v : {from, to, chord, border}) transpose(v);
+        for (Lanes* v : {from, to, chord, border}) transpose4(v);
         // Direction (fig. 5): the border's normal (from a to b); if the
         // border is closed or ragged (its chord is short) the centroids decide
         // instead. Across the stripes if it is within 45 degrees of the
@@ -371,12 +361,12 @@ void computeEdgeFeatures(DecoderWorkspace& ws)
         Lanes feature[4] = {(Lanes)(ends | (direction + 1) << EdgeFeature::kEndBits | symbol << (EdgeFeature::kEndBits + 2)),
                             symbols.weight, (Lanes)(across & (LaneMask)symbols.bestMatch),
                             (Lanes)(across & (LaneMask)gradientError)};
-        transpose(feature);
+        transpose4(feature);
         Lanes equalized[4] = {symbols.change[0], symbols.change[1], symbols.change[2], symbols.relative};
-        transpose(equalized);
+        transpose4(equalized);
         Lanes change[4] = {symbols.rawChange[0], symbols.rawChange[1], symbols.rawChange[2],
                            lanesOf(-std::numeric_limits<float>::infinity())};
-        transpose(change);
+        transpose4(change);
         static_assert(sizeof(EdgeFeature) == sizeof(Lanes) && offsetof(Region, centroidX) == offsetof(Region, range) + 12);
         for (int i = 0; i < n; ++i) {
             std::memcpy(static_cast<void*>(&ws.edgeFeatures[e0 + i]), &feature[i], sizeof(EdgeFeature));

@@ -152,4 +152,20 @@ PairGradient horizontalPairGradient(const std::uint8_t* up, const std::uint8_t* 
                                     const cv::Vec2f& primary);
 PairGradient verticalPairGradient(const std::uint8_t* row, const std::uint8_t* below, int x, const cv::Vec2f& primary);
 
+// Four floats in GCC's vector extensions (SSE2 and NEON from one source).
+using Float4 = float __attribute__((vector_size(16)));
+
+// Rows to columns: v[j][i] = v[i][j] before. The edge and depth stages take
+// 4 records at a time and work on one field per vector, a record per lane.
+inline void transpose4(Float4 v[4])
+{
+    using Index = std::int32_t __attribute__((vector_size(16)));
+    const Float4 t0 = __builtin_shuffle(v[0], v[1], Index{0, 4, 1, 5}), t1 = __builtin_shuffle(v[2], v[3], Index{0, 4, 1, 5});
+    const Float4 t2 = __builtin_shuffle(v[0], v[1], Index{2, 6, 3, 7}), t3 = __builtin_shuffle(v[2], v[3], Index{2, 6, 3, 7});
+    v[0] = __builtin_shuffle(t0, t1, Index{0, 1, 4, 5});
+    v[1] = __builtin_shuffle(t0, t1, Index{2, 3, 6, 7});
+    v[2] = __builtin_shuffle(t2, t3, Index{0, 1, 4, 5});
+    v[3] = __builtin_shuffle(t2, t3, Index{2, 3, 6, 7});
+}
+
 }  // namespace stria::pipeline
