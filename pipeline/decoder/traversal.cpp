@@ -132,13 +132,20 @@ private:
     // Eq. 9 for the edge's optimal symbol (parallel edges: 0).
     float bestError(const EdgeFeature& edge) const { return edge.bestMatch + alpha_ * edge.gradientError; }
 
+    // Eq. 5-6 for `symbol` on `edge` walked from `from` to `to`: the edge
+    // stage's error if it is the optimal symbol, else from the edge's stored
+    // change (seen from a, so the symbol reversed when walking from b).
+    float symbolMatch(const EdgeFeature& edge, int from, int to, SymbolCode symbol) const
+    {
+        if (bestSymbolFrom(edge, from, to) == symbol) return edge.bestMatch;
+        return symbolError(ws_.edgeChanges[&edge - features_], from < to ? symbol : reversedSymbol(symbol), scales_);
+    }
+
     // Eq. 9 for `symbol` on `edge` walked from `from` to `to`, and eq. 10
     // into positionError if given.
     float edgeError(int from, int to, const EdgeFeature& edge, SymbolCode symbol, float* positionError) const
     {
-        const float match = bestSymbolFrom(edge, from, to) == symbol
-                                ? edge.bestMatch
-                                : symbolError(ws_.edgeChanges[&edge - features_], from < to ? symbol : reversedSymbol(symbol), scales_);
+        const float match = symbolMatch(edge, from, to, symbol);
         if (positionError) *positionError = beta_ * match / std::max(edge.weight, 1.0f) + edge.gradientError;
         return match + alpha_ * edge.gradientError;
     }
@@ -242,16 +249,11 @@ private:
                         continue;
                     if (stripes_[next] >= 0 || std::find(path + begin, path + end, next) != path + end)
                         continue;
-                    // The optimal symbol's error the edge stage left; the
-                    // others' errors all evaluated before any is compared, so
-                    // that their chains of divisions overlap.
-                    const SymbolCode best = bestSymbolFrom(edge, endRegion, next);
-                    const EdgeChange& change = ws_.edgeChanges[ws_.adjacency[r.adjacencyBegin + i]];
-                    const bool fromA = endRegion < next;
+                    // All the needed symbols' errors evaluated before any is
+                    // compared, so that their chains of divisions overlap.
                     std::array<float, kSymbolCount> errors;
                     for (int k = 0; k < neededCount; ++k)
-                        errors[k] = (needed[k] == best ? edge.bestMatch : symbolError(change, fromA ? needed[k] : reversedSymbol(needed[k]), scales_)) +
-                                    alpha_ * edge.gradientError;
+                        errors[k] = symbolMatch(edge, endRegion, next, needed[k]) + alpha_ * edge.gradientError;
                     for (int k = 0; k < neededCount; ++k) {
                         if (errors[k] < bestError) {
                             bestError = errors[k];

@@ -104,12 +104,14 @@ struct DecoderWorkspace {
     // the graph and depth stages (instead of comparing the labels again).
     std::uint64_t* rowBorders = nullptr;
     std::unique_ptr<std::int32_t[]> labels;
-    // One buffer, four uses in turn: the watershed's plateau queue and
+    // One buffer, five uses in turn: the watershed's plateau queue and
     // union-find parents, then pixels sorted by label (regions), then the
-    // graph's hash table of label pairs, then the output points (depth).
-    // Points are 24 bytes, so maxPoints = pixels / 6 fits exactly.
+    // graph's hash table of label pairs, then the edges' changes (edgeChanges
+    // below), then the output points (depth). Points are 24 bytes, so
+    // maxPoints = pixels / 6 fits exactly.
     std::unique_ptr<std::byte[]> orderAndPoints;
-    std::size_t orderEntries = 0;  // its size in int32 entries: max(pixels, graphTableEntries)
+    // Its size in int32 entries: max(pixels, graphTableEntries, 4 maxEdges).
+    std::size_t orderEntries = 0;
     std::int32_t* pixelOrder = nullptr;
     ScanPoint* points = nullptr;
     // Also in the order buffer, from the edge stage until depth: each edge's
