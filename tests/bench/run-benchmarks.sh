@@ -27,7 +27,13 @@ bench=$build/tests/bench/stria_bench
 
 json=$build/bench-results.json
 load=$(cut -d' ' -f1-3 /proc/loadavg)
+# Random interleaving: the repetitions of all benchmarks run in a shuffled
+# order, so a slow spell of a shared machine falls on the decode and on its
+# Sobel reference alike instead of on whichever ran then (this VM's speed
+# drifts by 30 % within minutes), and the ratios of medians compare like
+# with like.
 "$bench" --benchmark_repetitions="$repetitions" --benchmark_report_aggregates_only=true \
+    --benchmark_enable_random_interleaving=true \
     --benchmark_out="$json" --benchmark_out_format=json
 
 compiler=$(sed -n 's/^CMAKE_CXX_COMPILER:[A-Z]*=//p' "$build/CMakeCache.txt")
