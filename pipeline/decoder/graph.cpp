@@ -97,39 +97,43 @@ void buildGraph(DecoderWorkspace& ws)
         cleared = end;
     };
     clearAhead();
-    auto edgeOf = [&](std::uint32_t a, std::uint32_t b) -> std::int32_t {
+    // A pair's edge record; past the capacity (a new edge with no room left,
+    // ws.truncated) a record nobody reads, so that the hot path has no test.
+    GraphEdge overflow;
+    auto edgeOf = [&](std::uint32_t a, std::uint32_t b) -> GraphEdge* {
         const std::uint64_t key = std::uint64_t{a} << 32 | b;
         std::uint64_t slot = key * 0x9e3779b97f4a7c15u >> shift;
-        // Masks, not bools: GCC turns selects on bools into branches here.
-        std::int32_t e, emptyMask;  // -1 where the slot is empty
+        // The key goes in ahead at the next free index (e <= capacity: the
+        // scratch has room for one more), and an empty slot (-1) reads as
+        // that index (the unsigned minimum: stored indices are below it), so
+        // the probe stops at the edge or at the empty slot by one compare,
+        // and whether the edge is new (a fifth of the look-ups, in no pattern
+        // a branch predictor learns) is selected, not branched on.
+        edgeKey[edgeCount] = key;
+        std::uint32_t e;
         for (;; slot = (slot + 1) & (tableSize - 1)) {
-            const std::int32_t found = table[slot];
-            emptyMask = found >> 31;
-            e = (found & ~emptyMask) | (edgeCount & emptyMask);
-            if (((edgeKey[e] ^ key) & ~static_cast<std::uint64_t>(std::int64_t{emptyMask})) == 0) break;
+            e = std::min(static_cast<std::uint32_t>(table[slot]), static_cast<std::uint32_t>(edgeCount));
+            if (edgeKey[e] == key) break;
         }
-        table[slot] = e;
-        edgeKey[e] = key;  // e <= capacity: the scratch has room for one more
-        edgeCount -= emptyMask;
-        if (edgeCount >= cleared) {  // every 64 new edges, and once full
+        table[slot] = static_cast<std::int32_t>(e);
+        edgeCount += e == static_cast<std::uint32_t>(edgeCount);
+        if (edgeCount >= cleared) [[unlikely]] {  // every 64 new edges, and once full
             if (edgeCount > capacity) {  // new, and no room left: undone
                 table[slot] = -1;
                 edgeCount = capacity;
                 ws.truncated = true;
-                return -1;
+                return &overflow;
             }
             clearAhead();
         }
-        return e;
+        return edges + e;
     };
 
     // Adds border pair p-q (q right of p or below it) to its edge.
     auto addPair = [&](std::int32_t lp, std::int32_t lq, bool horizontal, const PairGradient& gradient) {
         // Without a branch: which side has the smaller label is unpredictable.
-        const std::int32_t e = edgeOf(std::min(lp, lq), std::max(lp, lq));
-        if (e < 0) return;
+        GraphEdge& edge = *edgeOf(std::min(lp, lq), std::max(lp, lq));
         const int sign = lp < lq ? 1 : -1;  // +1: the normal from a to b points to +x / +y
-        GraphEdge& edge = edges[e];
         ++edge.borderCount;
         std::int16_t& normal = horizontal ? edge.normalX : edge.normalY;
         if (normal > -32767 && normal < 32767) normal = static_cast<std::int16_t>(normal + sign);
@@ -138,23 +142,52 @@ void buildGraph(DecoderWorkspace& ws)
     };
 
     // The border pairs of each row in raster order, horizontal then
-    // vertical.
+    // vertical. The pair kernels read 8 bytes from 3 x (vertical pairs also
+    // from 3 x - 3): pairGradient takes the pairs they do not reach, at their
+    // place in that order (a row's last horizontal pair; its first vertical
+    // pair and last two), and the mask walks leave them out, so that they
+    // test no column per pair. A local copy of the primary direction: the
+    // kernels' broadcasts of it are hoisted (the edge sums' float stores
+    // might alias the workspace's).
+    const cv::Vec2f primary = ws.primary;
+    const int words = borderWords(w);
+    const int lastH = w - 2;  // the last horizontal pair, in the last word
+    const std::uint64_t lastHBit = std::uint64_t{1} << (lastH & 63);
     for (int y = 0; y < h; ++y) {
         const std::int32_t* row = label + static_cast<std::ptrdiff_t>(y) * w;
         const std::uint8_t* up = ws.frame.row(std::max(y - 1, 0));
         const std::uint8_t* pixels = ws.frame.row(y);
         const std::uint8_t* down = ws.frame.row(std::min(y + 1, h - 1));
-        forEachBit(ws.rowBorders + static_cast<std::ptrdiff_t>(y) * borderWords(w), w - 1, [&](int x) {
-            addPair(row[x], row[x + 1], true,
-                    x + 2 < w ? graph_kernels::horizontalPair(up, pixels, down, x, ws.primary)
-                              : pairGradient(ws.frame, x, y, true, ws.primary));
-        });
-        if (y + 1 < h)
-            forEachBorder(row, row + w, w, [&](int x) {
-                addPair(row[x], row[x + w], false,
-                        x > 0 && x + 2 < w ? graph_kernels::verticalPair(pixels, down, x, ws.primary)
-                                           : pairGradient(ws.frame, x, y, false, ws.primary));
-            });
+        const std::uint64_t* masks = ws.rowBorders + static_cast<std::ptrdiff_t>(y) * words;
+        auto horizontalPairs = [&](int i0, std::uint64_t bits) {
+            for (; bits; bits &= bits - 1) {
+                const int x = i0 + std::countr_zero(bits);
+                addPair(row[x], row[x + 1], true, graph_kernels::horizontalPair(up, pixels, down, x, primary));
+            }
+        };
+        if (lastH >= 0) {
+            for (int k = 0; k + 1 < words; ++k) horizontalPairs(64 * k, masks[k]);
+            horizontalPairs(64 * (words - 1), masks[words - 1] & ~lastHBit);
+            if (masks[words - 1] & lastHBit) addPair(row[lastH], row[lastH + 1], true, pairGradient(ws.frame, lastH, y, true, primary));
+        }
+        if (y + 1 < h) {
+            auto verticalPair = [&](int x) {
+                addPair(row[x], row[x + w], false, pairGradient(ws.frame, x, y, false, primary));
+            };
+            if (row[0] != row[w]) verticalPair(0);
+            // Columns 1 to w - 3.
+            std::uint64_t first = ~std::uint64_t{1};
+            for (int i0 = 0; i0 < w - 2; i0 += 64) {
+                for (std::uint64_t bits = borderMask(row + i0, row + w + i0, std::min(64, w - 2 - i0)) & first; bits;
+                     bits &= bits - 1) {
+                    const int x = i0 + std::countr_zero(bits);
+                    addPair(row[x], row[x + w], false, graph_kernels::verticalPair(pixels, down, x, primary));
+                }
+                first = ~std::uint64_t{0};
+            }
+            for (int x = std::max(w - 2, 1); x < w; ++x)
+                if (row[x] != row[x + w]) verticalPair(x);
+        }
     }
 
     ws.edgeCount = edgeCount;
