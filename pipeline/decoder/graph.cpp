@@ -108,7 +108,9 @@ void buildGraph(DecoderWorkspace& ws)
         // that index (the unsigned minimum: stored indices are below it), so
         // the probe stops at the edge or at the empty slot by one compare,
         // and whether the edge is new (a fifth of the look-ups, in no pattern
-        // a branch predictor learns) is selected, not branched on.
+        // a branch predictor learns) is selected, not branched on (GCC 12
+        // makes the minimum a cmov with the signed count, a branch with an
+        // unsigned one: check the mispredictions when changing it).
         edgeKey[edgeCount] = key;
         std::uint32_t e;
         for (;; slot = (slot + 1) & (tableSize - 1)) {
@@ -159,9 +161,9 @@ void buildGraph(DecoderWorkspace& ws)
         const std::uint8_t* pixels = ws.frame.row(y);
         const std::uint8_t* down = ws.frame.row(std::min(y + 1, h - 1));
         const std::uint64_t* masks = ws.rowBorders + static_cast<std::ptrdiff_t>(y) * words;
-        auto horizontalPairs = [&](int i0, std::uint64_t bits) {
+        auto horizontalPairs = [&](std::size_t i0, std::uint64_t bits) {
             for (; bits; bits &= bits - 1) {
-                const int x = i0 + std::countr_zero(bits);
+                const std::size_t x = i0 + static_cast<unsigned>(std::countr_zero(bits));
                 addPair(row[x], row[x + 1], true, graph_kernels::horizontalPair(up, pixels, down, x, primary));
             }
         };
@@ -177,10 +179,10 @@ void buildGraph(DecoderWorkspace& ws)
             if (row[0] != row[w]) verticalPair(0);
             // Columns 1 to w - 3.
             std::uint64_t first = ~std::uint64_t{1};
-            for (int i0 = 0; i0 < w - 2; i0 += 64) {
-                for (std::uint64_t bits = borderMask(row + i0, row + w + i0, std::min(64, w - 2 - i0)) & first; bits;
+            for (std::size_t i0 = 0; static_cast<int>(i0) < w - 2; i0 += 64) {
+                for (std::uint64_t bits = borderMask(row + i0, row + w + i0, std::min(64, w - 2 - static_cast<int>(i0))) & first; bits;
                      bits &= bits - 1) {
-                    const int x = i0 + std::countr_zero(bits);
+                    const std::size_t x = i0 + static_cast<unsigned>(std::countr_zero(bits));
                     addPair(row[x], row[x + w], false, graph_kernels::verticalPair(pixels, down, x, primary));
                 }
                 first = ~std::uint64_t{0};
@@ -200,7 +202,7 @@ void buildGraph(DecoderWorkspace& ws)
     Region* regions = ws.regions.get();
     std::int32_t* next = ws.scratch.get() + 2 * static_cast<std::ptrdiff_t>(ws.maxEdges) + 2;
     std::fill(next, next + ws.regionCount, 0);
-    for (int e = 0; e < edgeCount; ++e) {
+    for (int e = 0; e < ws.edgeCount; ++e) {
         const auto a = static_cast<std::int32_t>(edgeKey[e] >> 32), b = static_cast<std::int32_t>(edgeKey[e] & 0xffffffffu);
         edges[e].a = a;
         edges[e].b = b;
@@ -214,7 +216,7 @@ void buildGraph(DecoderWorkspace& ws)
         next[r] = offset;
         offset += regions[r].degree;
     }
-    for (int e = 0; e < edgeCount; ++e) {
+    for (int e = 0; e < ws.edgeCount; ++e) {
         ws.adjacency[next[edges[e].a]++] = e;
         ws.adjacency[next[edges[e].b]++] = e;
     }
