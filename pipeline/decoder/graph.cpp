@@ -14,6 +14,7 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <cstring>
 
 namespace stria::pipeline {
 
@@ -46,6 +47,27 @@ PairGradient pairGradient(const FrameView& frame, int x, int y, bool horizontal,
     }
     return out;
 }
+
+namespace {
+
+// A border pair's labels as one word, q's high and p's low (addPair).
+std::uint64_t labelPair(std::int32_t p, std::int32_t q)
+{
+    return std::uint64_t{static_cast<std::uint32_t>(q)} << 32 | static_cast<std::uint32_t>(p);
+}
+// The same for p and the label after it (a little-endian 8-byte load).
+std::uint64_t labelPair(const std::int32_t* p)
+{
+    if constexpr (std::endian::native == std::endian::little) {
+        std::uint64_t word;
+        std::memcpy(&word, p, sizeof word);
+        return word;
+    } else {
+        return labelPair(p[0], p[1]);
+    }
+}
+
+}  // namespace
 
 std::size_t graphScratchEntries(std::size_t regions, std::size_t edges)
 {
@@ -100,8 +122,7 @@ void buildGraph(DecoderWorkspace& ws)
     // A pair's edge record; past the capacity (a new edge with no room left,
     // ws.truncated) a record nobody reads, so that the hot path has no test.
     GraphEdge overflow;
-    auto edgeOf = [&](std::uint32_t a, std::uint32_t b) -> GraphEdge* {
-        const std::uint64_t key = std::uint64_t{a} << 32 | b;
+    auto edgeOf = [&](std::uint64_t key) -> GraphEdge* {
         std::uint64_t slot = key * 0x9e3779b97f4a7c15u >> shift;
         // The key goes in ahead at the next free index (e <= capacity: the
         // scratch has room for one more), and an empty slot (-1) reads as
@@ -131,11 +152,17 @@ void buildGraph(DecoderWorkspace& ws)
         return edges + e;
     };
 
-    // Adds border pair p-q (q right of p or below it) to its edge.
-    auto addPair = [&](std::int32_t lp, std::int32_t lq, bool horizontal, const PairGradient& gradient) {
-        // Without a branch: which side has the smaller label is unpredictable.
-        GraphEdge& edge = *edgeOf(std::min(lp, lq), std::max(lp, lq));
-        const int sign = lp < lq ? 1 : -1;  // +1: the normal from a to b points to +x / +y
+    // Adds border pair p-q (q right of p or below it) to its edge, given
+    // its labels as one word, q's high and p's low (a horizontal pair's two
+    // labels as they lie in memory). The edge's key, the smaller label high
+    // and the larger low, is the smaller of that word and its halves
+    // swapped (the labels differ), and the word is not the key where p has
+    // the smaller label: a rotation, a compare and a select, without a
+    // branch (which side has the smaller label is unpredictable).
+    auto addPair = [&](std::uint64_t labels, bool horizontal, const PairGradient& gradient) {
+        const std::uint64_t key = std::min(labels, std::rotl(labels, 32));
+        GraphEdge& edge = *edgeOf(key);
+        const int sign = key != labels ? 1 : -1;  // +1: the normal from a to b points to +x / +y
         ++edge.borderCount;
         std::int16_t& normal = horizontal ? edge.normalX : edge.normalY;
         if (normal > -32767 && normal < 32767) normal = static_cast<std::int16_t>(normal + sign);
@@ -164,26 +191,28 @@ void buildGraph(DecoderWorkspace& ws)
         auto horizontalPairs = [&](std::size_t i0, std::uint64_t bits) {
             for (; bits; bits &= bits - 1) {
                 const std::size_t x = i0 + static_cast<unsigned>(std::countr_zero(bits));
-                addPair(row[x], row[x + 1], true, graph_kernels::horizontalPair(up, pixels, down, x, primary));
+                addPair(labelPair(row + x), true, graph_kernels::horizontalPair(up, pixels, down, x, primary));
             }
         };
         if (lastH >= 0) {
             for (int k = 0; k + 1 < words; ++k) horizontalPairs(64 * k, masks[k]);
             horizontalPairs(64 * (words - 1), masks[words - 1] & ~lastHBit);
-            if (masks[words - 1] & lastHBit) addPair(row[lastH], row[lastH + 1], true, pairGradient(ws.frame, lastH, y, true, primary));
+            if (masks[words - 1] & lastHBit)
+                addPair(labelPair(row + lastH), true, pairGradient(ws.frame, lastH, y, true, primary));
         }
         if (y + 1 < h) {
             auto verticalPair = [&](int x) {
-                addPair(row[x], row[x + w], false, pairGradient(ws.frame, x, y, false, primary));
+                addPair(labelPair(row[x], row[x + w]), false, pairGradient(ws.frame, x, y, false, primary));
             };
             if (row[0] != row[w]) verticalPair(0);
             // Columns 1 to w - 3.
             std::uint64_t first = ~std::uint64_t{1};
-            for (std::size_t i0 = 0; static_cast<int>(i0) < w - 2; i0 += 64) {
-                for (std::uint64_t bits = borderMask(row + i0, row + w + i0, std::min(64, w - 2 - static_cast<int>(i0))) & first; bits;
-                     bits &= bits - 1) {
-                    const std::size_t x = i0 + static_cast<unsigned>(std::countr_zero(bits));
-                    addPair(row[x], row[x + w], false, graph_kernels::verticalPair(pixels, down, x, primary));
+            for (int i0 = 0; i0 < w - 2; i0 += 64) {
+                const std::uint64_t mask = borderMask(row + i0, row + w + i0, std::min(64, w - 2 - i0)) & first;
+                for (std::uint64_t bits = mask; bits; bits &= bits - 1) {
+                    const std::size_t x = static_cast<unsigned>(i0) + static_cast<unsigned>(std::countr_zero(bits));
+                    addPair(labelPair(row[x], row[x + w]), false,
+                            graph_kernels::verticalPair(pixels, down, x, primary));
                 }
                 first = ~std::uint64_t{0};
             }

@@ -73,8 +73,8 @@ inline PairGradient pairTerms(Floats gx, Floats gy, const cv::Vec2f& primary)
 #endif
 
 
-inline PairGradient horizontalPair(const std::uint8_t* up, const std::uint8_t* row, const std::uint8_t* down, std::size_t x,
-                                    const cv::Vec2f& primary)
+inline PairGradient horizontalPair(const std::uint8_t* up, const std::uint8_t* row, const std::uint8_t* down,
+                                   std::size_t x, const cv::Vec2f& primary)
 {
     const std::size_t i = 3 * x;
 #if defined(__ARM_NEON) || defined(__SSE2__)
@@ -93,7 +93,8 @@ inline PairGradient horizontalPair(const std::uint8_t* up, const std::uint8_t* r
 #endif
 }
 
-inline PairGradient verticalPair(const std::uint8_t* row, const std::uint8_t* below, std::size_t x, const cv::Vec2f& primary)
+inline PairGradient verticalPair(const std::uint8_t* row, const std::uint8_t* below, std::size_t x,
+                                 const cv::Vec2f& primary)
 {
     const std::size_t i = 3 * x;
 #if defined(__ARM_NEON) || defined(__SSE2__)
