@@ -71,9 +71,9 @@ std::uint64_t labelPair(const std::int32_t* p)
 
 std::size_t graphScratchEntries(std::size_t regions, std::size_t edges)
 {
-    // The label pair of each edge (2 entries), and one more for the look-up's
-    // read at the next free index, then a counter per region; the traversal
-    // reuses the share.
+    // The label pair of each edge (2 entries), and one more for the key the
+    // look-up stores ahead at the next free index, then a counter per
+    // region; the traversal reuses the share.
     return regions + 2 * edges + 2;
 }
 
@@ -132,14 +132,16 @@ void buildGraph(DecoderWorkspace& ws)
         // a branch predictor learns) is selected, not branched on (GCC 12
         // makes the minimum a cmov with the signed count, a branch with an
         // unsigned one: check the mispredictions when changing it).
-        edgeKey[edgeCount] = key;
-        std::uint32_t e;
-        for (;; slot = (slot + 1) & (tableSize - 1)) {
-            e = std::min(static_cast<std::uint32_t>(table[slot]), static_cast<std::uint32_t>(edgeCount));
-            if (edgeKey[e] == key) break;
+        const auto next = static_cast<std::uint32_t>(edgeCount);
+        edgeKey[next] = key;
+        auto probe = [&] { return std::min(static_cast<std::uint32_t>(table[slot]), next); };
+        std::uint32_t e = probe();
+        while (edgeKey[e] != key) {  // a collision: about 1 look-up in 12
+            slot = (slot + 1) & (tableSize - 1);
+            e = probe();
         }
         table[slot] = static_cast<std::int32_t>(e);
-        edgeCount += e == static_cast<std::uint32_t>(edgeCount);
+        edgeCount += e >= next;  // e <= next: new where equal (compare and add with carry)
         if (edgeCount >= cleared) [[unlikely]] {  // every 64 new edges, and once full
             if (edgeCount > capacity) {  // new, and no room left: undone
                 table[slot] = -1;
