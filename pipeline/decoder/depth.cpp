@@ -39,6 +39,20 @@ constexpr float kCentroidThreshold = 0.25f;
 // than 1 away from every stripe and from itself minus any stripe.
 constexpr std::int32_t kUndecoded = -(1 << 30);
 
+// Per symbol code and orientation (0: the stripe index falls from left to
+// right, 1: it rises), the numerators of an edge's channel weights: the
+// orientation (-1 or +1) times the symbol's expected sign, the same float
+// products step 2 took per edge (its int-to-float conversions and products
+// were 4 of the 9 instructions per channel).
+constexpr auto kSignedSigns = [] {
+    std::array<std::array<std::array<float, 3>, 2>, kSymbolCount> numerators{};
+    for (int s = 0; s < kSymbolCount; ++s)
+        for (int o = 0; o < 2; ++o)
+            for (int c = 0; c < 3; ++c)
+                numerators[s][o][c] = (o == 1 ? 1.0f : -1.0f) * static_cast<float>(kSymbolSigns[s][c]);
+    return numerators;
+}();
+
 // Four float lanes (GCC vector extensions: SSE2 on x86-64, NEON on ARM).
 using Lanes = float __attribute__((vector_size(16)));
 // Two double lanes (SSE2 / NEON), and two ints.
@@ -123,6 +137,10 @@ void computePoints(DecoderWorkspace& ws)
     const std::int32_t* labels = ws.labels.get();
     const cv::Matx33f& m = ws.colorCorrection;
     ws.pointCount = 0;
+    // An image narrower than a centroid window with its peak's margins has
+    // no edge to locate (each peak fails the bounds test in step 4); from
+    // here on w - 2 - 2 kSearchRadius >= 0.
+    if (w < 2 + 2 * kSearchRadius) return;
     // The regions' stripes in a compact array (in the scratch, free after
     // the traversal): the scan looks up two per label change, and the
     // 64-byte region records would bring one cache line each.
@@ -153,10 +171,12 @@ void computePoints(DecoderWorkspace& ws)
     std::array<const float*, kBatch + 3> windows;  // the centroid's samples in samples[]
     std::array<std::int32_t, kBatch + 3> peaks;
     std::array<float, kBatch + 3> thresholds;
-    std::array<cv::Vec3f, kBatch + 3> positions;  // the points, if valid
-    std::array<std::int64_t, kBatch + 3> intersects;  // all ones if valid
+    std::array<ScanPoint, kBatch + 3> staged;  // the points, if valid
+    std::array<std::int64_t, kBatch + 3> intersects;  // not 0 if valid
 
+    const unsigned peakLimit = static_cast<unsigned>(w - 2 - 2 * kSearchRadius);
     for (int y = 0; y < h; ++y) {
+        const float rowV = static_cast<float>(y);
         const std::int32_t* label = labels + static_cast<std::ptrdiff_t>(y) * w;
         const std::uint8_t* row = ws.frame.row(y);
         const RowRays rays(ws, y);
@@ -167,9 +187,18 @@ void computePoints(DecoderWorkspace& ws)
         // and waited for them (1388x1038: depth 3.0-3.2 -> 2.1-2.8 ms warm),
         // and the labels come from the graph stage's time, long evicted
         // (780x580: 1.09-1.14 -> 1.04-1.08 ms).
+        // One loop for both, 4 label lines and 3 pixel lines per step (the
+        // labels take 4 bytes a pixel, the pixels 3): a quarter of the loop
+        // overhead of a loop per line. Addresses as integers: the last step
+        // may reach up to 3 lines past either row (past the buffers' ends
+        // in the last row), harmless for a prefetch, not for a pointer.
         if (y + 1 < h) {
-            for (int b = 0; b < 3 * w; b += 64) __builtin_prefetch(ws.frame.row(y + 1) + b);
-            for (int b = 0; b < 4 * w; b += 64) __builtin_prefetch(reinterpret_cast<const char*>(label + w) + b);
+            const std::uintptr_t nextLabels = reinterpret_cast<std::uintptr_t>(label + w);
+            const std::uintptr_t nextPixels = reinterpret_cast<std::uintptr_t>(ws.frame.row(y + 1));
+            for (std::uintptr_t b = 0, p = 0; b < 4u * static_cast<unsigned>(w); b += 256, p += 192) {
+                for (int k = 0; k < 4; ++k) __builtin_prefetch(reinterpret_cast<const void*>(nextLabels + b + 64 * k));
+                for (int k = 0; k < 3; ++k) __builtin_prefetch(reinterpret_cast<const void*>(nextPixels + p + 64 * k));
+            }
         }
         int count = 0;
         for (int x0 = 0; x0 < w - 1; x0 += 64) {
@@ -193,11 +222,10 @@ void computePoints(DecoderWorkspace& ws)
                     const Region& right = regions[label[x + 1]];
                     const int leftStripe = stripes[label[x]], rightStripe = stripes[label[x + 1]];
                     const int edge = std::min(leftStripe, rightStripe);
-                    const std::array<std::int8_t, 3>& sign = kSymbolSigns[ws.pattern.edgeSymbol(edge)];
-                    const float orientation = rightStripe > leftStripe ? 1.0f : -1.0f;
+                    const std::array<float, 3>& numerator =
+                        kSignedSigns[ws.pattern.edgeSymbol(edge)][rightStripe > leftStripe ? 1 : 0];
                     for (int c = 0; c < 3; ++c)
-                        weights[j][c] = orientation * static_cast<float>(sign[c]) /
-                                        std::max(0.5f * (left.range[c] + right.range[c]), 1.0f);
+                        weights[j][c] = numerator[c] / std::max(0.5f * (left.range[c] + right.range[c]), 1.0f);
                     edges[j] = edge;
                     firsts[j] = x - 2 * kSearchRadius;
                 }
@@ -225,7 +253,8 @@ void computePoints(DecoderWorkspace& ws)
                     constexpr int kCentre = 2 * kSearchRadius;  // x's sample
                     static_assert(kSearchRadius == 2, "5 ranks");
                     constexpr std::array<int, 5> kRank = {3, 2, 4, 1, 0};       // per sample x - 2 .. x + 2
-                    constexpr std::array<int, 5> kOffset = {2, 1, -1, -2, 0};  // per rank: peak - x
+                    // static: GCC stored a local table to the stack per edge.
+                    static constexpr std::array<int, 5> kOffset = {2, 1, -1, -2, 0};  // per rank: peak - x
                     std::int64_t top = std::numeric_limits<std::int64_t>::min();
                     for (int k = 0; k <= 4; ++k)
                         top = std::max(top, std::int64_t{std::bit_cast<std::int32_t>(s[kCentre - 2 + k])} * 8 + kRank[k]);
@@ -234,7 +263,8 @@ void computePoints(DecoderWorkspace& ws)
                     // The peak must lie inside the search window with its
                     // whole centroid window in the image: an edge whose
                     // profile the image border cuts off cannot be located.
-                    if (!(peakValue > 0) || peak - kSearchRadius < 0 || peak + kSearchRadius > w - 2) continue;
+                    // (peak - kSearchRadius < 0 or peak + kSearchRadius > w - 2, as one unsigned compare.)
+                    if (!(peakValue > 0) || static_cast<unsigned>(peak - kSearchRadius) > peakLimit) continue;
                     if (peak == x + kSearchRadius)
                         projectedGradientsReference(row, x + 2 * kSearchRadius, 1, ws.rgbOffset, m, weights[j],
                                                     &s[2 * kCentre]);
@@ -299,32 +329,46 @@ void computePoints(DecoderWorkspace& ws)
                     const Doubles denom = Doubles{p0.normal[0], p1.normal[0]} * xn +
                                           Doubles{p0.normal[1], p1.normal[1]} * yn + Doubles{p0.normal[2], p1.normal[2]};
                     const Doubles t = Doubles{-p0.d, -p1.d} / denom;
-                    // Not parallel (|denom| >= 1e-12) and in front of the camera.
-                    const auto valid = (t > Doubles{}) & ~((denom < 1e-12) & (denom > -1e-12));
+                    // Not parallel (|denom| >= 1e-12) and in front of the camera:
+                    // then t's bits (t > 0: not all zero), else +0's (all
+                    // zero). GCC 12 stores a comparison mask as such lane by
+                    // lane through scalar registers (and 1, neg); a select of
+                    // t is one andpd. (|denom| >= 1e-12 as two tests, not as
+                    // ~(denom < 1e-12 & denom > -1e-12): they differ only for
+                    // a NaN denom, whose t is NaN and fails t > 0.)
+                    const Doubles valid = (t > Doubles{}) & ((denom >= 1e-12) | (denom <= -1e-12)) ? t : Doubles{};
                     const Doubles px = xn * t, py = yn * t;
+                    // Whole points, so the loop below copies the kept ones as they are.
                     for (int i = 0; i < 2; ++i)
-                        positions[j + i] =
-                            cv::Vec3f(static_cast<float>(px[i]), static_cast<float>(py[i]), static_cast<float>(t[i]));
+                        staged[j + i] = ScanPoint{
+                            cv::Vec3f(static_cast<float>(px[i]), static_cast<float>(py[i]), static_cast<float>(t[i])),
+                            cv::Point2f(static_cast<float>(columns[j + i]), rowV), edges[j + i]};
                     std::memcpy(&intersects[j], &valid, sizeof valid);
                 }
+                // The count and the output in locals: through ws, GCC
+                // reloaded them after every point's store.
+                ScanPoint* const points = ws.points;
+                int pointCount = ws.pointCount;
+                const int maxPoints = ws.maxPoints;
                 for (int j = 0; j < located; ++j) {
                     if (!intersects[j]) continue;
-                    const int edge = edges[j];
-                    const ScanPoint scanPoint{positions[j],
-                                              cv::Point2f(static_cast<float>(columns[j]), static_cast<float>(y)), edge};
+                    const ScanPoint& scanPoint = staged[j];
+                    const int edge = scanPoint.edge;
                     // Along one projector ray the camera depth grows with the
                     // distance from the projector: the smaller z is the lit point.
                     if (const int earlier = rowPoint[edge]; earlier >= 0) {
-                        if (scanPoint.position[2] < ws.points[earlier].position[2]) ws.points[earlier] = scanPoint;
+                        if (scanPoint.position[2] < points[earlier].position[2]) points[earlier] = scanPoint;
                         continue;
                     }
-                    if (ws.pointCount == ws.maxPoints) {
+                    if (pointCount == maxPoints) {
+                        ws.pointCount = pointCount;
                         ws.truncated = true;  // the frame is cut here
                         return;
                     }
-                    rowPoint[edge] = ws.pointCount;
-                    ws.points[ws.pointCount++] = scanPoint;
+                    rowPoint[edge] = pointCount;
+                    points[pointCount++] = scanPoint;
                 }
+                ws.pointCount = pointCount;
                 count = 0;
             }
         }
