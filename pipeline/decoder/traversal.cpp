@@ -201,6 +201,9 @@ private:
         return static_cast<std::uint64_t>(ordered) << 32 | static_cast<std::uint32_t>(index);
     }
 
+    // A region on the growing path (findUniquePath), in stripes_ only.
+    static constexpr std::int32_t kOnPath = 0x7fffffff;
+
     // Step 1. Returns true when the path was unique and its regions are assigned.
     bool findUniquePath(int seedEdge)
     {
@@ -213,6 +216,14 @@ private:
         int begin = maxPath, end = maxPath;
         path[end++] = forward ? seed.a : seed.b;
         path[end++] = forward ? seed.b : seed.a;
+        // The path's regions hold kOnPath in stripes_ while it grows, so one
+        // test (stripe >= 0) skips decoded regions and the path's own; they
+        // are undecoded again if no unique path is found.
+        stripes_[path[begin]] = stripes_[path[begin + 1]] = kOnPath;
+        auto fail = [&] {
+            for (int i = begin; i < end; ++i) stripes_[path[i]] = -1;
+            return false;
+        };
         const SymbolCode symbol = bestSymbolFrom(features_[seedEdge], path[end - 2], path[end - 1]);
         // candidates: pattern edge index of the path's first edge.
         int count = 0;
@@ -242,29 +253,43 @@ private:
                 }
                 const int endRegion = left ? path[begin] : path[end - 1];
                 const Region& r = ws_.regions[endRegion];
-                for (int i = 0; i < r.degree && neededCount > 0; ++i) {
-                    const EdgeFeature& edge = features_[ws_.adjacency[r.adjacencyBegin + i]];
-                    const int next = edge.otherEnd(endRegion);
-                    if (directionFrom(edge, endRegion, next) != (left ? EdgeDirection::Backward : EdgeDirection::Forward))
-                        continue;
-                    if (stripes_[next] >= 0 || std::find(path + begin, path + end, next) != path + end)
-                        continue;
-                    // All the needed symbols' errors evaluated before any is
-                    // compared, so that their chains of divisions overlap.
-                    std::array<float, kSymbolCount> errors;
-                    for (int k = 0; k < neededCount; ++k)
-                        errors[k] = symbolMatch(edge, endRegion, next, needed[k]) + alpha_ * edge.gradientError;
-                    for (int k = 0; k < neededCount; ++k) {
-                        if (errors[k] < bestError) {
-                            bestError = errors[k];
-                            bestRegion = next;
-                            bestLeft = left;
-                            bestSymbol = needed[k];
+                if (neededCount == 0) continue;
+                // The edges that can extend the path (right direction, the
+                // neighbour undecoded, not on the path: kOnPath) are picked first,
+                // a chunk at a time, without a branch: which pass is data.
+                const EdgeDirection outward = left ? EdgeDirection::Backward : EdgeDirection::Forward;
+                constexpr int kChunk = 64;
+                std::array<std::int32_t, kChunk> open;
+                for (int chunk = 0; chunk < r.degree; chunk += kChunk) {
+                    const int chunkEnd = std::min(r.degree, chunk + kChunk);
+                    int openCount = 0;
+                    for (int i = chunk; i < chunkEnd; ++i) {
+                        const int e = ws_.adjacency[r.adjacencyBegin + i];
+                        const EdgeFeature& edge = features_[e];
+                        const int next = edge.otherEnd(endRegion);
+                        open[openCount] = e;
+                        openCount += (directionFrom(edge, endRegion, next) == outward) & (stripes_[next] < 0);
+                    }
+                    for (int j = 0; j < openCount; ++j) {
+                        const EdgeFeature& edge = features_[open[j]];
+                        const int next = edge.otherEnd(endRegion);
+                        // All the needed symbols' errors evaluated before any is
+                        // compared, so that their chains of divisions overlap.
+                        std::array<float, kSymbolCount> errors;
+                        for (int k = 0; k < neededCount; ++k)
+                            errors[k] = symbolMatch(edge, endRegion, next, needed[k]) + alpha_ * edge.gradientError;
+                        for (int k = 0; k < neededCount; ++k) {
+                            if (errors[k] < bestError) {
+                                bestError = errors[k];
+                                bestRegion = next;
+                                bestLeft = left;
+                                bestSymbol = needed[k];
+                            }
                         }
                     }
                 }
             }
-            if (bestRegion < 0) return false;
+            if (bestRegion < 0) return fail();
             int kept = 0;
             for (int c = 0; c < count; ++c) {
                 const int stripeHere = ws_.candidates[c] + (bestLeft ? 0 : end - begin - 1);
@@ -276,8 +301,9 @@ private:
             count = kept;
             if (bestLeft) path[--begin] = bestRegion;
             else path[end++] = bestRegion;
+            stripes_[bestRegion] = kOnPath;
         }
-        if (count != 1) return false;
+        if (count != 1) return fail();
 
         const int first = ws_.candidates[0];
         const int pass = ws_.passCount;
