@@ -543,22 +543,41 @@ private:
         std::fill(score, score + ws_.regionCount, 0);
         std::int32_t* pairs = ws_.scratch.get();
         int linkCount = 0;
+        // The edges that can weigh are listed first, without a branch (which
+        // regions are decoded is data), in the seed order's buffer (free
+        // after the seeds): across the stripes those with a decoded end, in
+        // edge order (the links' order) from the front, along them those
+        // between regions of different stripes from the back (their
+        // scores are sums: the order does not matter). The two lists hold
+        // at most edgeCount entries; where they meet, both write e.
+        std::int32_t* across = ws_.edgeOrder.get();
+        std::int32_t* along = across + ws_.maxEdges - 1;  // along[-i]
+        int acrossCount = 0, alongCount = 0;
         for (int e = 0; e < ws_.edgeCount; ++e) {
             const GraphEdge& edge = ws_.edges[e];
             const int sa = stripes_[edge.a], sb = stripes_[edge.b];
-            if ((sa & sb) < 0) continue;  // neither end decoded
+            const bool parallel = features_[e].direction() == EdgeDirection::Parallel;
+            across[acrossCount] = e;
+            acrossCount += !parallel & ((sa & sb) >= 0);
+            along[-alongCount] = e;
+            alongCount += parallel & ((sa | sb) >= 0) & (sa != sb);
+        }
+        // Along the stripes the stripe stays: a weak edge to a region
+        // decoded as another stripe contradicts one of them.
+        for (int i = 0; i < alongCount; ++i) {
+            const int e = along[-i];
+            const GraphEdge& edge = ws_.edges[e];
+            const EdgeFeature& feature = features_[e];
+            if (feature.weight < weakEdge(edge.a)) score[edge.a] += kAlongStripeWeight * edge.borderCount;
+            if (feature.weight < weakEdge(edge.b)) score[edge.b] += kAlongStripeWeight * edge.borderCount;
+        }
+        for (int i = 0; i < acrossCount; ++i) {
+            const int e = across[i];
+            const GraphEdge& edge = ws_.edges[e];
+            const int sa = stripes_[edge.a], sb = stripes_[edge.b];
             const EdgeFeature& feature = features_[e];
             const EdgeDirection direction = feature.direction();
             const int border = edge.borderCount;
-            if (direction == EdgeDirection::Parallel) {
-                // Along the stripes the stripe stays: a weak edge to a region
-                // decoded as another stripe contradicts one of them.
-                if (sa >= 0 && sb >= 0 && sa != sb) {
-                    if (feature.weight < weakEdge(edge.a)) score[edge.a] += kAlongStripeWeight * border;
-                    if (feature.weight < weakEdge(edge.b)) score[edge.b] += kAlongStripeWeight * border;
-                }
-                continue;
-            }
             const int step = static_cast<int>(direction);  // b = a + step if consecutive
             if (sa >= 0 && sb >= 0) {
                 if (sa == sb) {  // a null edge within the stripe
