@@ -8,6 +8,8 @@
 
 #if defined(__ARM_NEON)
 #include <arm_neon.h>
+#elif defined(__x86_64__)
+#include <xmmintrin.h>
 #endif
 
 namespace stria::pipeline {
@@ -174,18 +176,49 @@ template <typename V>
 // AVX-512 version (watershed 1.37 -> 1.21 ms at 780x580), where a select then
 // a broadcast took 3 dependent instructions. On ARM a vbsl then a dup, 4
 // instructions fewer per block than the and-or.
+// (stored: the block as stored, for the unresolved mask of the last sweep.)
 template <int last, typename V>
-[[gnu::always_inline]] inline V storeWithCarry(std::int32_t* out, V m, V v, V carry)
+[[gnu::always_inline]] inline V storeWithCarry(std::int32_t* out, V m, V v, V carry, V& stored)
 {
     constexpr V lastLane = everyLane<V>(last);
 #if defined(__x86_64__)
     const V own = v & ~m;
-    store(out, own | (carry & m));
+    stored = own | (carry & m);
+    store(out, stored);
     return (carry & __builtin_shuffle(m, lastLane)) | __builtin_shuffle(own, lastLane);
 #else
-    v = select(m, carry, v);
-    store(out, v);
-    return __builtin_shuffle(v, lastLane);
+    stored = select(m, carry, v);
+    store(out, stored);
+    return __builtin_shuffle(stored, lastLane);
+#endif
+}
+
+// Bit i set if lane i of v is negative (kUnresolved): on x86-64 by SSE
+// movmskps, the sign bits of 4 lanes (an AVX one could not be inlined into
+// this template, compiled for the baseline; GCC's own lane-by-lane reduction
+// of a compare took 20 instructions).
+template <typename V>
+[[gnu::always_inline]] inline std::uint64_t negativeBits(V v)
+{
+#if defined(__x86_64__)
+    std::uint64_t bits = 0;
+    for (int i = 0; i < kLanes<V>; i += 4) {
+        __m128 quarter;
+        std::memcpy(&quarter, reinterpret_cast<const char*>(&v) + 4 * i, sizeof quarter);
+        bits |= std::uint64_t{static_cast<unsigned>(_mm_movemask_ps(quarter))} << i;
+    }
+    return bits;
+#else
+    // Lane i's weight 2^i, summed (one addv on arm64).
+    static_assert(kLanes<V> == 4);
+    const V bits = (v >> 31) & V{1, 2, 4, 8};
+#if defined(__aarch64__)
+    int32x4_t lanes;
+    std::memcpy(&lanes, &bits, sizeof lanes);
+    return static_cast<std::uint64_t>(vaddvq_s32(lanes));
+#else
+    return static_cast<std::uint64_t>(bits[0] + bits[1] + bits[2] + bits[3]);
+#endif
 #endif
 }
 
@@ -220,7 +253,8 @@ template <typename V>
         scanStep<1>(v, m);
         scanStep<2>(v, m);
         if constexpr (n == 8) scanStep<4>(v, m);
-        carry = storeWithCarry<n - 1>(row + x, m, v, carry);
+        V stored;
+        carry = storeWithCarry<n - 1>(row + x, m, v, carry, stored);
     }
     std::int32_t previous = carry[0];
     for (int x = blocks; x < width; ++x) {
@@ -233,17 +267,23 @@ template <typename V>
 // The same from the right (the tail first), lanes mirrored. (Written out
 // twice on purpose: one always_inline scan for both directions, with the
 // shuffle masks as arguments, cost 3 % more instructions in this kernel.)
+// The last sweep also marks the pixels left unresolved (negative labels: in
+// the watershed, whose path leads down), as each block is final when stored:
+// sign-bit masks, where a pass of 16-label compares over the row took 4 times
+// more instructions.
 template <typename V>
 [[gnu::always_inline]] inline void sweepLanes(const std::uint8_t* code, const std::int32_t* above, std::int32_t* row,
-                                              int width)
+                                              int width, std::uint64_t* unresolved)
 {
     upLeftLanes<V>(code, above, row, width);
     constexpr int n = kLanes<V>;
     const int blocks = width & ~(n - 1);
+    for (int k = 0; k < (width + 63) / 64; ++k) unresolved[k] = 0;
     std::int32_t next = kUnresolved;
     for (int x = width - 1; x >= blocks; --x) {
         if ((code[x] & kArrowBits) == kDescentRight) row[x] = next;
         next = row[x];
+        unresolved[x >> 6] |= std::uint64_t{next < 0} << (x & 63);
     }
     V carry = V{} + next;
     for (int x = blocks - n; x >= 0; x -= n) {
@@ -252,7 +292,10 @@ template <typename V>
         scanStep<-1>(v, m);
         scanStep<-2>(v, m);
         if constexpr (n == 8) scanStep<-4>(v, m);
-        carry = storeWithCarry<0>(row + x, m, v, carry);
+        V stored;
+        carry = storeWithCarry<0>(row + x, m, v, carry, stored);
+        // Blocks of 4 or 8 at multiples of their size: never across a word.
+        unresolved[x >> 6] |= negativeBits(stored) << (x & 63);
     }
 }
 
@@ -276,19 +319,20 @@ using Lanes8 = std::int32_t __attribute__((vector_size(32)));
 {
     upLeftLanes<Lanes8>(c, a, r, w);
 }
-[[gnu::target("default")]] void sweepVersion(const std::uint8_t* c, const std::int32_t* a, std::int32_t* r, int w)
+[[gnu::target("default")]] void sweepVersion(const std::uint8_t* c, const std::int32_t* a, std::int32_t* r, int w,
+                                             std::uint64_t* u)
 {
-    sweepLanes<Lanes>(c, a, r, w);
+    sweepLanes<Lanes>(c, a, r, w, u);
 }
 [[gnu::target("arch=x86-64-v3")]] void sweepVersion(const std::uint8_t* c, const std::int32_t* a, std::int32_t* r,
-                                                     int w)
+                                                     int w, std::uint64_t* u)
 {
-    sweepLanes<Lanes8>(c, a, r, w);
+    sweepLanes<Lanes8>(c, a, r, w, u);
 }
 [[gnu::target("arch=x86-64-v4")]] void sweepVersion(const std::uint8_t* c, const std::int32_t* a, std::int32_t* r,
-                                                     int w)
+                                                     int w, std::uint64_t* u)
 {
-    sweepLanes<Lanes8>(c, a, r, w);
+    sweepLanes<Lanes8>(c, a, r, w, u);
 }
 #endif
 
@@ -302,11 +346,14 @@ void sweepRowUpLeftReference(const std::uint8_t* code, const std::int32_t* above
         if ((code[x] & kArrowBits) == kDescentLeft) row[x] = x > 0 ? row[x - 1] : kUnresolved;
 }
 
-void sweepRowReference(const std::uint8_t* code, const std::int32_t* above, std::int32_t* row, int width)
+void sweepRowReference(const std::uint8_t* code, const std::int32_t* above, std::int32_t* row, int width,
+                       std::uint64_t* unresolved)
 {
     sweepRowUpLeftReference(code, above, row, width);
     for (int x = width - 1; x >= 0; --x)
         if ((code[x] & kArrowBits) == kDescentRight) row[x] = x + 1 < width ? row[x + 1] : kUnresolved;
+    for (int k = 0; k < (width + 63) / 64; ++k) unresolved[k] = 0;
+    for (int x = 0; x < width; ++x) unresolved[x / 64] |= std::uint64_t{row[x] < 0} << (x % 64);
 }
 
 void sweepRowUpLeft(const std::uint8_t* code, const std::int32_t* above, std::int32_t* row, int width)
@@ -318,12 +365,13 @@ void sweepRowUpLeft(const std::uint8_t* code, const std::int32_t* above, std::in
 #endif
 }
 
-void sweepRow(const std::uint8_t* code, const std::int32_t* above, std::int32_t* row, int width)
+void sweepRow(const std::uint8_t* code, const std::int32_t* above, std::int32_t* row, int width,
+              std::uint64_t* unresolved)
 {
 #if defined(__x86_64__)
-    sweepVersion(code, above, row, width);
+    sweepVersion(code, above, row, width, unresolved);
 #else
-    sweepLanes<Lanes>(code, above, row, width);
+    sweepLanes<Lanes>(code, above, row, width, unresolved);
 #endif
 }
 

@@ -85,6 +85,24 @@ int flatColumns(const std::uint8_t* code, int width, std::int32_t* __restrict co
 {
     static_assert(std::endian::native == std::endian::little, "byte k of the word is pixel k");
     int count = 0, x = 0;
+#if defined(__SSE2__)
+    // 16 bits 3 per movemask (bit 3 shifted to each byte's bit 7), the
+    // positions added in vectors (GCC vectorised the loop below only at times).
+    for (; x + 16 <= width; x += 16) {
+        const __m128i c = _mm_loadu_si128(reinterpret_cast<const __m128i*>(code + x));
+        const unsigned bits = static_cast<unsigned>(_mm_movemask_epi8(_mm_slli_epi16(c, 4)));
+        for (int half = 0; half < 2; ++half) {
+            const unsigned mask = bits >> (8 * half) & 0xff;
+            const __m128i base = _mm_set1_epi32(x + 8 * half);
+            const auto* positions = reinterpret_cast<const __m128i*>(kSetBits.positions[mask].data());
+            _mm_storeu_si128(reinterpret_cast<__m128i*>(columns + count),
+                             _mm_add_epi32(base, _mm_loadu_si128(positions)));
+            _mm_storeu_si128(reinterpret_cast<__m128i*>(columns + count + 4),
+                             _mm_add_epi32(base, _mm_loadu_si128(positions + 1)));
+            count += kSetBits.count[mask];
+        }
+    }
+#endif
     for (; x + 8 <= width; x += 8) {
         std::uint64_t c;
         std::memcpy(&c, code + x, 8);
@@ -126,7 +144,7 @@ int runWords(int width) { return (width + 63) / 64; }
 RunWord* runWordsIn(std::int32_t* scratch, int width, int height)
 {
     static_assert(alignof(RunWord) == 2 * alignof(std::int32_t));
-    const std::size_t offset = codeEntries(static_cast<std::size_t>(width) * height, width) + width + 8 + 64;
+    const std::size_t offset = codeEntries(static_cast<std::size_t>(width) * height, width) + width + 8;
     return reinterpret_cast<RunWord*>(scratch + offset + offset % 2);
 }
 
@@ -153,9 +171,9 @@ std::int32_t findBasin(std::int32_t* parent, std::int32_t b)
 std::size_t watershedScratchEntries(int width, int height)
 {
     // The codes and the wall, then the first pixels' columns of a row (and 8
-    // more), then 64 labels kUnresolved, then the run words of two rows
-    // (after at most one entry to align them).
-    return codeEntries(static_cast<std::size_t>(width) * height, width) + width + 8 + 64 + 1 +
+    // more), then the run words of two rows (after at most one entry to align
+    // them; in step 4 the unresolved pixels' bits).
+    return codeEntries(static_cast<std::size_t>(width) * height, width) + width + 8 + 1 +
            2 * runWords(width) * sizeof(RunWord) / sizeof(std::int32_t);
 }
 
@@ -165,13 +183,11 @@ void computeWatershed(DecoderWorkspace& ws)
     const std::uint8_t* g = ws.gradient.get();
     std::int32_t* label = ws.labels.get();
     // Scratch: the codes, a row of 255 (the wall beyond the image border),
-    // a row's minima codes (bytes), later its first pixels' columns, 64
-    // unresolved labels to compare with, and the run words (runWordsIn).
+    // a row's minima codes (bytes), later its first pixels' columns, and the
+    // run words (runWordsIn), later a row's unresolved pixels as bits.
     auto* code = reinterpret_cast<std::uint8_t*>(ws.scratch.get());
     std::uint8_t* wall = code + n;
     std::int32_t* columns = ws.scratch.get() + codeEntries(n, w);
-    std::int32_t* unresolvedRow = columns + w + 8;
-    std::fill(unresolvedRow, unresolvedRow + 64, kUnresolved);
     std::fill(wall, wall + w, 255);
     const std::array<std::int32_t, 4> step{-w, -1, 1, w};
 
@@ -370,20 +386,25 @@ void computeWatershed(DecoderWorkspace& ws)
     // labels along arrows up and left, one to the left those along arrows
     // right (a run of arrows ends at a pixel with an arrow up, a minimum's
     // first pixel or an arrow down, never at one against it), without a
-    // branch (sweepRow). What remains leads down: those pixels, found 64 at a
-    // time by a compare mask, walk to a labelled pixel and label the path on
+    // branch (sweepRow). What remains leads down: those pixels, marked in bit
+    // masks by the last sweep, walk to a labelled pixel and label the path on
     // the way back. A walk ends at a path labelled before or, in a row
     // below, at the first pixel of a minimum's run (along the run's arrows),
     // which still holds its provisional label.
+    // The row's unresolved pixels as bits (sweepRow), in the run words' place.
+    auto* unresolved = reinterpret_cast<std::uint64_t*>(runs);
+    int firstSeen = 0;
     for (int y = 0; y < h; ++y) {
         const std::uint8_t* rowCode = code + y * w;
         std::int32_t* row = label + y * w;
+        // The new minima's first pixels hold provisional labels 0, 1, 2, ...
+        // in raster order (step 3): the label is the count so far, not loaded.
         const int firstPixels = flatColumns(rowCode, w, columns);
-        for (int i = 0; i < firstPixels; ++i) row[columns[i]] = parent[~row[columns[i]]];
-        sweepRow(rowCode, y > 0 ? row - w : row, row, w);  // no arrow up in row 0
+        for (int i = 0; i < firstPixels; ++i) row[columns[i]] = parent[firstSeen + i];
+        firstSeen += firstPixels;
+        sweepRow(rowCode, y > 0 ? row - w : row, row, w, unresolved);  // no arrow up in row 0
         for (int x0 = 0; x0 < w; x0 += 64) {
-            const int count = std::min(64, w - x0);
-            std::uint64_t bits = ~borderMask(row + x0, unresolvedRow, count) & (~0ull >> (64 - count));
+            std::uint64_t bits = unresolved[x0 / 64];
             auto labelPath = [&](int p, int q) {
                 // Without a branch (it mispredicted): parent[0] read in vain
                 // if the end's label is final.

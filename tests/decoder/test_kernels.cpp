@@ -381,11 +381,13 @@ TEST(DecoderKernels, SweepRowsMatchReferencesOnRandomRowsOfEveryWidth)
                 fast[x] = reference[x] = rng() % 8 == 0 ? kUnresolved : static_cast<std::int32_t>(rng() % 1000);
             }
             std::vector<std::int32_t> fastUpLeft = fast, referenceUpLeft = reference;
-            sweepRow(code.data(), above.data(), fast.data(), width);
-            sweepRowReference(code.data(), above.data(), reference.data(), width);
+            // The unresolved masks start as garbage: the sweeps write every word.
+            std::vector<std::uint64_t> fastUnresolved((width + 63) / 64, ~0ull), referenceUnresolved((width + 63) / 64, 0x5555);
+            sweepRow(code.data(), above.data(), fast.data(), width, fastUnresolved.data());
+            sweepRowReference(code.data(), above.data(), reference.data(), width, referenceUnresolved.data());
             sweepRowUpLeft(code.data(), above.data(), fastUpLeft.data(), width);
             sweepRowUpLeftReference(code.data(), above.data(), referenceUpLeft.data(), width);
-            differing += fast != reference || fastUpLeft != referenceUpLeft;
+            differing += fast != reference || fastUpLeft != referenceUpLeft || fastUnresolved != referenceUnresolved;
             ++rows;
         }
     EXPECT_EQ(differing, 0) << "of " << rows << " rows";
