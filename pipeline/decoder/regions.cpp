@@ -11,8 +11,8 @@
 // region's pixels and sums their coordinates; the second, with the counts as
 // offsets (a counting sort by label), copies each run's pixels, 4 bytes each,
 // into the watershed's order buffer, where each region's pixels then lie
-// together (a region's runs arrive in order, so its write position moves
-// through one cache line at a time). Each region's medians are then
+// together, 3 free entries after each region's (a region's runs arrive in
+// order, so its write position moves through one cache line at a time). Each region's medians are then
 // selected from its own few hundred bytes, in L1 (channelMedians, simd.hpp).
 #include "pipeline/decoder/simd.hpp"
 #include "pipeline/decoder/workspace.hpp"
@@ -25,8 +25,22 @@ namespace stria::pipeline {
 
 std::size_t regionScratchEntries(std::size_t regions)
 {
-    // Coordinate sums (2 x int64), a counter and an end (int32) per region.
-    return 6 * regions;
+    // Coordinate sums (2 x int64) and a counter (int32) per region.
+    return 5 * regions;
+}
+
+// Each region's sorted pixels are followed by kRegionGap free entries: the
+// copy writes whole blocks of 4 pixels from a run's first, up to 3 past the
+// run's end, and the median search reads the block after a region's whole
+// blocks, up to 3 past its last pixel (the last region's 4th is the entry
+// after all gaps).
+namespace {
+constexpr int kRegionGap = 3;
+}
+
+std::size_t regionOrderEntries(std::size_t pixels, std::size_t regions)
+{
+    return pixels + kRegionGap * regions + 1;
 }
 
 void computeRegions(DecoderWorkspace& ws)
@@ -37,12 +51,10 @@ void computeRegions(DecoderWorkspace& ws)
     for (int r = 0; r < count; ++r) regions[r] = Region{};
     // Compact per-region arrays in the scratch (the Region records are 64
     // bytes apart): coordinate sums, then a counter, first of pixels and
-    // then the position of the region's next pixel, and the end of the
-    // region's positions.
+    // then the position of the region's next pixel.
     auto* sums = reinterpret_cast<std::int64_t*>(ws.scratch.get());  // x, y per region
     auto* counter = reinterpret_cast<std::int32_t*>(sums + 2 * static_cast<std::ptrdiff_t>(count));
     std::fill(sums, sums + 2 * static_cast<std::ptrdiff_t>(count), 0);
-    std::int32_t* regionEnd = counter + count;
     std::fill(counter, counter + count, 0);
 
     // Calls run(x, end, y, r) for each run [x, end) of label r in row y. The
@@ -78,8 +90,7 @@ void computeRegions(DecoderWorkspace& ws)
         regions[r].centroidX = static_cast<float>(static_cast<double>(sums[2 * r] / 2) / size);
         regions[r].centroidY = static_cast<float>(static_cast<double>(sums[2 * r + 1]) / size);
         counter[r] = offset;
-        offset += regions[r].pixelCount;
-        regionEnd[r] = offset;
+        offset += regions[r].pixelCount + kRegionGap;
     }
 
     // A pixel's 3 bytes and the next one in 4 bytes (the frame's last pixel
@@ -94,9 +105,12 @@ void computeRegions(DecoderWorkspace& ws)
         // write (a row or two later): the first write to each line was a
         // miss to L3 or memory (the buffer is 4 bytes per pixel).
         __builtin_prefetch(sorted + counter[r] + 16, 1);
-        if (y < blockRows && counter[r] + (3 & (x - end)) <= regionEnd[r]) {
+        if (y < blockRows) {
             // Whole blocks of 4: up to 3 pixels past the run land in the
-            // region's own later positions, which its later runs overwrite.
+            // region's own later positions, which its later runs overwrite,
+            // or in the gap after it (kRegionGap: before the gaps, a run
+            // near its region's end took the pixel loop, a branch that was
+            // mispredicted 9 k times per 780x580 decode).
             // Two pixels per 8-byte load and store, their 4 bytes apart by
             // a shift (little-endian): half the loads and stores of a 4-byte
             // copy per pixel (copy phase 780x580 0.56 -> 0.53 ms, 1388x1038
@@ -133,9 +147,9 @@ void computeRegions(DecoderWorkspace& ws)
     });
 
     // Regions of up to 255 pixels four at a time (channelMediansOfFour
-    // overlaps their searches), larger ones alone. channelMedians reads up
-    // to 4 pixels past a region's last: the last regions take the reference.
-    const std::ptrdiff_t n = static_cast<std::ptrdiff_t>(w) * h;
+    // overlaps their searches), larger ones alone. They read up to 4 pixels
+    // past a region's last: its gap, then the next region's first (or the
+    // entry after the last gap).
     const cv::Matx33f& m = ws.colorCorrection;
     auto setColor = [&](int r, const std::array<std::uint8_t, 3>& byByte) {
         const cv::Vec3f median(byByte[ws.rgbOffset[0]], byByte[ws.rgbOffset[1]], byByte[ws.rgbOffset[2]]);
@@ -148,9 +162,7 @@ void computeRegions(DecoderWorkspace& ws)
     for (int r = 0; r < count; ++r) {
         const int size = regions[r].pixelCount;
         const std::uint32_t* pixels = sorted + counter[r] - size;
-        if (counter[r] + 4 > n) {
-            setColor(r, channelMediansReference(pixels, size));
-        } else if (size > 255) {
+        if (size > 255) {
             setColor(r, channelMedians(pixels, size));
         } else {
             smallPixels[waiting] = pixels;

@@ -110,7 +110,7 @@ struct DecoderWorkspace {
     // below), then the output points (depth). Points are 24 bytes, so
     // maxPoints = pixels / 6 fits exactly.
     std::unique_ptr<std::byte[]> orderAndPoints;
-    // Its size in int32 entries: max(pixels, graphTableEntries, 4 maxEdges).
+    // Its size in int32 entries: max(regionOrderEntries, graphTableEntries, 4 maxEdges).
     std::size_t orderEntries = 0;
     std::int32_t* pixelOrder = nullptr;
     ScanPoint* points = nullptr;
@@ -159,6 +159,9 @@ inline int borderWords(int width) { return (width + 62) / 64; }
 std::size_t watershedScratchEntries(int width, int height);
 // Region statistics and graph construction: the scratch entries they need.
 std::size_t regionScratchEntries(std::size_t regions);
+// The order buffer entries the region stage's sorted pixels take (a gap
+// after each region's).
+std::size_t regionOrderEntries(std::size_t pixels, std::size_t regions);
 std::size_t graphScratchEntries(std::size_t regions, std::size_t edges);
 // The graph's hash table of label pairs, in the order buffer (int32 entries;
 // the buffer holds max(pixels, this)).
