@@ -143,8 +143,8 @@ TEST(DecoderKernels, EdgeLocationGradientsEqualReferenceOnSimulatorFrame)
 
 // Region medians whose fast selection differs from the reference: every
 // count up to 70 (around the 4-pixel blocks, and the tail alone) and a few
-// up to 3000 (past the 255 pixels the byte-lane search takes and the 254
-// blocks of one chunk of the 16-bit sums), of random bytes, of
+// up to 3000 (past the 255 pixels the byte-lane search takes, the 64-block
+// steps of the 16-bit sums' loop and the 254 blocks of one chunk), of random bytes, of
 // few distinct values (ties at the median) and of the extremes 0 and 255.
 int regionMediansDiffering(unsigned seed)
 {
@@ -163,7 +163,7 @@ int regionMediansDiffering(unsigned seed)
         const auto medians = channelMediansOfFour(regions, counts);
         for (int j = 0; j < 4; ++j) differing += medians[j] != channelMediansReference(regions[j], counts[j]);
     };
-    for (int count : {1, 2, 3, 4, 5, 63, 64, 65, 252, 255, 256, 257, 1016, 1019, 1020, 3000})
+    for (int count : {1, 2, 3, 4, 5, 63, 64, 65, 252, 255, 256, 257, 511, 512, 516, 771, 1016, 1019, 1020, 3000})
         for (int kind = 0; kind < 3; ++kind) {
             for (int i = 0; i < count; ++i) {
                 const std::uint32_t v = rng();
