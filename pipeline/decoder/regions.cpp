@@ -12,8 +12,9 @@
 // offsets (a counting sort by label), copies each run's pixels, 4 bytes each,
 // into the watershed's order buffer, where each region's pixels then lie
 // together, 3 free entries after each region's (a region's runs arrive in
-// order, so its write position moves through one cache line at a time). Each region's medians are then
-// selected from its own few hundred bytes, in L1 (channelMedians, simd.hpp).
+// order, so its write position moves through one cache line at a time).
+// Each region's medians are then selected from its own few hundred bytes,
+// in L1 (channelMedians, simd.hpp).
 #include "pipeline/decoder/simd.hpp"
 #include "pipeline/decoder/workspace.hpp"
 

@@ -164,7 +164,7 @@ std::size_t regionScratchEntries(std::size_t regions);
 std::size_t regionOrderEntries(std::size_t pixels, std::size_t regions);
 std::size_t graphScratchEntries(std::size_t regions, std::size_t edges);
 // The graph's hash table of label pairs, in the order buffer (int32 entries;
-// the buffer holds max(pixels, this)).
+// the buffer holds max(regionOrderEntries, this)).
 std::size_t graphTableEntries(std::size_t regions, std::size_t edges);
 // The scratch every stage's share fits in (decoder.cpp): the gradient kernel's
 // row lanes, the watershed's codes, the region sums, the graph edges' label pairs;
