@@ -201,6 +201,33 @@ private:
         return static_cast<std::uint64_t>(ordered) << 32 | static_cast<std::uint32_t>(index);
     }
 
+    // Calls visit(e, to) for each edge e of region `from` (to: its other
+    // end) for which keep(edge, to) holds, in incidence order, until visit
+    // returns false (then returns false). Which edges qualify is decided
+    // first, for a chunk of edges at a time, without a branch: it depends on
+    // the neighbours' stripes, which is data to a branch predictor, and the
+    // edge features, read at random, load together.
+    template <class Keep, class Visit>
+    [[gnu::always_inline]] bool forEachEdgeWhere(int from, Keep&& keep, Visit&& visit) const
+    {
+        const Region& r = ws_.regions[from];
+        constexpr int kChunk = 64;
+        std::array<std::int32_t, kChunk> kept;
+        for (int chunk = 0; chunk < r.degree; chunk += kChunk) {
+            const int chunkEnd = std::min(r.degree, chunk + kChunk);
+            int keptCount = 0;
+            for (int i = chunk; i < chunkEnd; ++i) {
+                const int e = ws_.adjacency[r.adjacencyBegin + i];
+                const EdgeFeature& edge = features_[e];
+                kept[keptCount] = e;
+                keptCount += keep(edge, edge.otherEnd(from));
+            }
+            for (int k = 0; k < keptCount; ++k)
+                if (!visit(kept[k], features_[kept[k]].otherEnd(from))) return false;
+        }
+        return true;
+    }
+
     // A region on the growing path (findUniquePath), in stripes_ only.
     static constexpr std::int32_t kOnPath = 0x7fffffff;
 
@@ -252,42 +279,30 @@ private:
                     seen |= 1u << symbol;
                 }
                 const int endRegion = left ? path[begin] : path[end - 1];
-                const Region& r = ws_.regions[endRegion];
                 if (neededCount == 0) continue;
-                // The edges that can extend the path (right direction, the
-                // neighbour undecoded, not on the path: kOnPath) are picked first,
-                // a chunk at a time, without a branch: which pass is data.
+                // The edges that can extend the path: the right direction, the
+                // neighbour undecoded and not on the path (kOnPath).
                 const EdgeDirection outward = left ? EdgeDirection::Backward : EdgeDirection::Forward;
-                constexpr int kChunk = 64;
-                std::array<std::int32_t, kChunk> open;
-                for (int chunk = 0; chunk < r.degree; chunk += kChunk) {
-                    const int chunkEnd = std::min(r.degree, chunk + kChunk);
-                    int openCount = 0;
-                    for (int i = chunk; i < chunkEnd; ++i) {
-                        const int e = ws_.adjacency[r.adjacencyBegin + i];
-                        const EdgeFeature& edge = features_[e];
-                        const int next = edge.otherEnd(endRegion);
-                        open[openCount] = e;
-                        openCount += (directionFrom(edge, endRegion, next) == outward) & (stripes_[next] < 0);
-                    }
-                    for (int j = 0; j < openCount; ++j) {
-                        const EdgeFeature& edge = features_[open[j]];
-                        const int next = edge.otherEnd(endRegion);
-                        // All the needed symbols' errors evaluated before any is
-                        // compared, so that their chains of divisions overlap.
-                        std::array<float, kSymbolCount> errors;
-                        for (int k = 0; k < neededCount; ++k)
-                            errors[k] = symbolMatch(edge, endRegion, next, needed[k]) + alpha_ * edge.gradientError;
-                        for (int k = 0; k < neededCount; ++k) {
-                            if (errors[k] < bestError) {
-                                bestError = errors[k];
-                                bestRegion = next;
-                                bestLeft = left;
-                                bestSymbol = needed[k];
-                            }
+                auto extends = [&](const EdgeFeature& edge, int next) {
+                    return (directionFrom(edge, endRegion, next) == outward) & (stripes_[next] < 0);
+                };
+                forEachEdgeWhere(endRegion, extends, [&](int e, int next) {
+                    const EdgeFeature& edge = features_[e];
+                    // All the needed symbols' errors evaluated before any is
+                    // compared, so that their chains of divisions overlap.
+                    std::array<float, kSymbolCount> errors;
+                    for (int k = 0; k < neededCount; ++k)
+                        errors[k] = symbolMatch(edge, endRegion, next, needed[k]) + alpha_ * edge.gradientError;
+                    for (int k = 0; k < neededCount; ++k) {
+                        if (errors[k] < bestError) {
+                            bestError = errors[k];
+                            bestRegion = next;
+                            bestLeft = left;
+                            bestSymbol = needed[k];
                         }
                     }
-                }
+                    return true;
+                });
             }
             if (bestRegion < 0) return fail();
             int kept = 0;
@@ -389,10 +404,9 @@ private:
             for (int c = 0; c < 3; ++c)
                 referenceWeight = std::max(referenceWeight, std::abs(f.color[c] - ws_.regions[f.reference].color[c]));
         // Which edges can give a hypothesis (see bestHypothesis) is decided
-        // first, for a chunk of edges at a time, without a branch: whether a
-        // neighbour already holds the stripe is data (a branch on it
-        // mispredicted ~20 k times per 780x580 decode), and the edge
-        // features, read at random, load together. Across the stripes the
+        // first (forEachEdgeWhere), without a branch: whether a neighbour
+        // already holds the stripe is data (a branch on it mispredicted
+        // ~20 k times per 780x580 decode). Across the stripes the
         // only hypothesis is the next stripe, by an edge that is not weak:
         // a neighbour that holds it already needs no error evaluated (most
         // neighbours of a decoded region, in the interior of a pass). Along
@@ -401,47 +415,36 @@ private:
         const int refStripe = f.reference >= 0 ? stripes_[f.reference] : -1;
         const bool nullEdges = refStripe >= 0 && std::abs(refStripe - f.stripe) == 1;
         const int stripeCount = ws_.pattern.stripeCount();
-        constexpr int kChunk = 64;
-        std::array<std::int32_t, kChunk> kept;
-        for (int chunk = 0; chunk < f.degree; chunk += kChunk) {
-            const int chunkEnd = std::min(f.degree, chunk + kChunk);
-            int keptCount = 0;
-            for (int i = chunk; i < chunkEnd; ++i) {
-                const int e = ws_.adjacency[f.adjacencyBegin + i];
-                const EdgeFeature& edge = features_[e];
-                const int to = edge.otherEnd(from);
-                const int toStripe = stripes_[to];
-                const int dir = static_cast<int>(directionFrom(edge, from, to)), next = f.stripe + dir;
-                const bool weak = edge.weight < weakBelow;
-                const bool across = (dir != 0) & !weak & (toStripe != next) & (next >= 0) & (next < stripeCount);
-                kept[keptCount] = e;
-                keptCount += (toStripe != f.stripe) & (across | ((dir == 0) & weak & nullEdges));
+        auto canGiveHypothesis = [&](const EdgeFeature& edge, int to) {
+            const int toStripe = stripes_[to];
+            const int dir = static_cast<int>(directionFrom(edge, from, to)), next = f.stripe + dir;
+            const bool weak = edge.weight < weakBelow;
+            const bool across = (dir != 0) & !weak & (toStripe != next) & (next >= 0) & (next < stripeCount);
+            return (toStripe != f.stripe) & (across | ((dir == 0) & weak & nullEdges));
+        };
+        forEachEdgeWhere(from, canGiveHypothesis, [&](int e, int to) {
+            const int toStripe = stripes_[to];
+            const EdgeDirection dir = directionFrom(features_[e], from, to);
+            const Hypothesis h = bestHypothesis(from, to, e, dir, referenceWeight);
+            if (h.stripe < 0 || h.stripe == toStripe) return true;
+            int tokens = f.tokens;
+            if (h.error < A_) {
+                tokens = std::min(tokens + 1, ws_.params.tokenBucketSize);
+            } else if (tokens > 0 && h.error < ws_.params.tokenErrorLimit) {
+                --tokens;
+            } else {
+                return true;
             }
-            for (int k = 0; k < keptCount; ++k) {
-                const int e = kept[k];
-                const int to = features_[e].otherEnd(from);
-                const int toStripe = stripes_[to];
-                const EdgeDirection dir = directionFrom(features_[e], from, to);
-                const Hypothesis h = bestHypothesis(from, to, e, dir, referenceWeight);
-                if (h.stripe < 0 || h.stripe == toStripe) continue;
-                int tokens = f.tokens;
-                if (h.error < A_) {
-                    tokens = std::min(tokens + 1, ws_.params.tokenBucketSize);
-                } else if (tokens > 0 && h.error < ws_.params.tokenErrorLimit) {
-                    --tokens;
-                } else {
-                    continue;
-                }
-                if (ws_.openCount == ws_.maxOpen) {
-                    ws_.truncated = true;
-                    return;
-                }
-                // The heap key orders by error, then region: the pushed errors
-                // are below A or tokenErrorLimit, so never NaN.
-                pushOpen({orderKey(h.error, to), h.positionError, h.reference, static_cast<std::int16_t>(h.stripe),
-                          static_cast<std::int16_t>(tokens)});
+            if (ws_.openCount == ws_.maxOpen) {
+                ws_.truncated = true;
+                return false;
             }
-        }
+            // The heap key orders by error, then region: the pushed errors
+            // are below A or tokenErrorLimit, so never NaN.
+            pushOpen({orderKey(h.error, to), h.positionError, h.reference, static_cast<std::int16_t>(h.stripe),
+                      static_cast<std::int16_t>(tokens)});
+            return true;
+        });
     }
 
     // The open heap, the lowest key on top: std::push_heap and std::pop_heap
