@@ -76,6 +76,12 @@ struct DecodeResult {
     StageTimings timings;
 };
 
+// The decoder's stages, in the order decode() runs them (StageTimings has one
+// field each).
+enum class DecoderStage { Gradient, Watershed, Regions, Graph, Edges, Traversal, Depth };
+inline constexpr int kDecoderStageCount = 7;
+const char* decoderStageName(DecoderStage stage);  // "gradient", "watershed", ...
+
 struct DecoderWorkspace;  // pipeline/decoder/workspace.hpp
 
 class Decoder {
@@ -90,6 +96,15 @@ public:
     // frame: BGR8 or RGB8, exactly the calibrated camera size, else an error
     // naming both sizes. Performs no heap allocation.
     Result<DecodeResult> decode(const FrameView& frame);
+    // Runs one stage again on the frame the last decode() decoded (the same
+    // view), on the workspace as the stages before it left it. Later stages
+    // reuse earlier stages' buffers, so a stage repeats decode()'s work only
+    // if the stages before it were repeated first, in order (test_decoder_
+    // allocation checks that this gives decode()'s points). For benchmarks
+    // that time one stage alone; decode() is the API. Performs no heap
+    // allocation. Fails, naming why, if nothing was decoded yet or `frame`
+    // is not the view the last decode() was given.
+    Status repeatStage(DecoderStage stage, const FrameView& frame);
     // Depth (z, mm) of the last decode into a caller-owned CV_32FC1 of camera
     // size; NaN where nothing was measured. Reallocates `depth` only if its
     // size or type differ.
@@ -106,7 +121,9 @@ public:
 
 private:
     explicit Decoder(std::unique_ptr<DecoderWorkspace> workspace);
+    Status checkFrame(const FrameView& frame) const;
     std::unique_ptr<DecoderWorkspace> ws_;
+    FrameView lastFrame_;  // the view the last decode() decoded (repeatStage)
 };
 
 }  // namespace stria::pipeline

@@ -150,9 +150,9 @@ Result<std::unique_ptr<Decoder>> Decoder::create(const StripePattern& pattern, c
     return std::unique_ptr<Decoder>(new Decoder(std::move(ws)));
 }
 
-Result<DecodeResult> Decoder::decode(const FrameView& frame)
+Status Decoder::checkFrame(const FrameView& frame) const
 {
-    DecoderWorkspace& ws = *ws_;
+    const DecoderWorkspace& ws = *ws_;
     if (frame.empty()) return Status::error("decode: the frame is empty");
     if (frame.format != PixelFormat::Bgr8 && frame.format != PixelFormat::Rgb8)
         return Status::error(std::string("decode: the frame is ") + pixelFormatName(frame.format) +
@@ -162,6 +162,14 @@ Result<DecodeResult> Decoder::decode(const FrameView& frame)
                              " but the camera is calibrated for " + sizeName(ws.width, ws.height));
     if (frame.stride < 3 * static_cast<std::ptrdiff_t>(frame.width))
         return Status::error("decode: the frame's stride " + std::to_string(frame.stride) + " is below 3 x width");
+    return Status::ok();
+}
+
+Result<DecodeResult> Decoder::decode(const FrameView& frame)
+{
+    DecoderWorkspace& ws = *ws_;
+    lastFrame_ = {};
+    if (Status status = checkFrame(frame); !status) return status;
     ws.frame = frame;
     ws.rgbOffset = frame.format == PixelFormat::Bgr8 ? std::array<int, 3>{2, 1, 0} : std::array<int, 3>{0, 1, 2};
     ws.truncated = false;
@@ -192,7 +200,43 @@ Result<DecodeResult> Decoder::decode(const FrameView& frame)
     result.decodedRegions = ws.decodedRegions;
     result.truncated = ws.truncated;
     ws.frame = {};
+    lastFrame_ = frame;
     return result;
+}
+
+Status Decoder::repeatStage(DecoderStage stage, const FrameView& frame)
+{
+    if (lastFrame_.empty()) return Status::error("repeatStage: no frame was decoded yet (or the last decode failed)");
+    if (frame.data != lastFrame_.data || frame.width != lastFrame_.width || frame.height != lastFrame_.height ||
+        frame.stride != lastFrame_.stride || frame.format != lastFrame_.format)
+        return Status::error("repeatStage: the frame is not the one the last decode() decoded");
+    DecoderWorkspace& ws = *ws_;
+    ws.frame = frame;
+    switch (stage) {
+    case DecoderStage::Gradient: computeGradient(ws); break;
+    case DecoderStage::Watershed: computeWatershed(ws); break;
+    case DecoderStage::Regions: computeRegions(ws); break;
+    case DecoderStage::Graph: buildGraph(ws); break;
+    case DecoderStage::Edges: computeEdgeFeatures(ws); break;
+    case DecoderStage::Traversal: decodeStripes(ws); break;
+    case DecoderStage::Depth: computePoints(ws); break;
+    }
+    ws.frame = {};
+    return Status::ok();
+}
+
+const char* decoderStageName(DecoderStage stage)
+{
+    switch (stage) {
+    case DecoderStage::Gradient: return "gradient";
+    case DecoderStage::Watershed: return "watershed";
+    case DecoderStage::Regions: return "regions";
+    case DecoderStage::Graph: return "graph";
+    case DecoderStage::Edges: return "edges";
+    case DecoderStage::Traversal: return "traversal";
+    case DecoderStage::Depth: return "depth";
+    }
+    return "unknown";
 }
 
 void Decoder::fillDepthMap(cv::Mat& depth) const

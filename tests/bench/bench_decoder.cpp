@@ -1,7 +1,8 @@
 // Whole-frame decode on simulator frames, with references measured in the
 // same run on the same frame: one 3x3 Sobel pass of OpenCV (x derivative,
 // CV_16S, on the BGR frame the decoder reads and on its grey version) and the
-// DP baseline. tests/bench/run-benchmarks.sh turns the medians into ratios.
+// DP baseline; and each stage alone. tests/bench/run-benchmarks.sh turns the
+// medians into ratios.
 #include "tests/bench/bench_frames.hpp"
 
 #include "pipeline/decoder.hpp"
@@ -13,6 +14,7 @@
 #include <algorithm>
 #include <cmath>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace stria::bench {
@@ -115,6 +117,40 @@ void decode(benchmark::State& state, FrameSize size)
     stage("ms_total", &pipeline::StageTimings::totalMs);
 }
 
+// One stage alone (Decoder::repeatStage): each iteration first repeats the
+// stages before it with the timer paused (later stages reuse their buffers),
+// then times the stage. The decoder's StageTimings instead time each stage
+// inside a whole decode, between clock reads.
+void stageAlone(benchmark::State& state, FrameSize size, pipeline::DecoderStage stage)
+{
+    const BenchFrame* frame = frameOrSkip(state, size);
+    if (!frame) return;
+    auto decoder = pipeline::Decoder::create(frame->rig.pattern, frame->rig.rig);
+    if (!decoder) {
+        state.SkipWithError(decoder.message().c_str());
+        return;
+    }
+    const FrameView view = viewOf(frame->rendering.image);
+    if (auto result = (*decoder)->decode(view); !result) {
+        state.SkipWithError(result.message().c_str());
+        return;
+    }
+    for (auto _ : state) {
+        state.PauseTiming();
+        Status status;
+        for (int s = 0; s < static_cast<int>(stage) && status; ++s)
+            status = (*decoder)->repeatStage(static_cast<pipeline::DecoderStage>(s), view);
+        state.ResumeTiming();
+        if (status) status = (*decoder)->repeatStage(stage, view);
+        if (!status) {
+            state.SkipWithError(status.message().c_str());
+            break;
+        }
+    }
+    state.counters["pixels"] = benchmark::Counter(static_cast<double>(view.width) * view.height,
+                                                  benchmark::Counter::kIsIterationInvariantRate);
+}
+
 void sobel(benchmark::State& state, FrameSize size, bool grey)
 {
     const BenchFrame* frame = frameOrSkip(state, size);
@@ -156,6 +192,16 @@ void dpBaseline(benchmark::State& state, FrameSize size)
 
 BENCHMARK_CAPTURE(decode, 780x580, FrameSize::Small)->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(decode, 1388x1038, FrameSize::Large)->Unit(benchmark::kMillisecond);
+// stage/<stage>_<size> for the seven stages at both sizes.
+const bool kStageBenchmarksRegistered = [] {
+    for (const auto& [size, sizeName] : {std::pair{FrameSize::Small, "780x580"}, std::pair{FrameSize::Large, "1388x1038"}})
+        for (int s = 0; s < pipeline::kDecoderStageCount; ++s) {
+            const auto stage = static_cast<pipeline::DecoderStage>(s);
+            const std::string name = std::string("stage/") + pipeline::decoderStageName(stage) + "_" + sizeName;
+            benchmark::RegisterBenchmark(name.c_str(), stageAlone, size, stage)->Unit(benchmark::kMillisecond);
+        }
+    return true;
+}();
 BENCHMARK_CAPTURE(sobel, bgr_780x580, FrameSize::Small, false)->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(sobel, grey_780x580, FrameSize::Small, true)->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(sobel, bgr_1388x1038, FrameSize::Large, false)->Unit(benchmark::kMillisecond);

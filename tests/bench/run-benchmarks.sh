@@ -99,6 +99,17 @@ for size in TARGETS:
     out.append(f"| {size} | " + " | ".join(f"{d['ms_' + s]:.2f}" for s in stages) +
                f" | {d['superpixels']:.0f} | {d['graph_edges']:.0f} |")
 out.append("")
+out.append("Each stage alone (`stage/<stage>_<size>`: Decoder::repeatStage after the earlier stages, which run "
+           "with the timer paused; CPU time, ms, and in Sobel BGR passes):")
+out.append("")
+out.append("| frame | " + " | ".join(stages[:-1]) + " | sum |")
+out.append("|---|" + "---|" * len(stages))
+for size in TARGETS:
+    sb = ms(get(f"sobel/bgr_{size}"))
+    alone = [ms(get(f"stage/{s}_{size}")) for s in stages[:-1]]
+    out.append(f"| {size} | " + " | ".join(f"{t:.2f} ({t / sb:.1f})" for t in alone) +
+               f" | {sum(alone):.2f} ({sum(alone) / sb:.1f}) |")
+out.append("")
 out.append("Video mode (`Streamer` over a `ReplayCamera` of 4 pre-rendered 780x580 frames, 3 frame slots, "
            "3 s per repetition; medians of 3 repetitions):")
 out.append("")

@@ -9,7 +9,9 @@
 
 #include <atomic>
 #include <cstdlib>
+#include <cstring>
 #include <new>
+#include <vector>
 
 namespace stria {
 namespace {
@@ -48,6 +50,62 @@ TEST(DecoderAllocation, DecodingFramesTwoToNAllocatesNothing)
     const long added = test::allocationCount() - before;
     EXPECT_EQ(added, 0);
     EXPECT_GT(points, 3u * 30000u);  // the frames were really decoded
+}
+
+// The per-stage benchmarks time Decoder::repeatStage: a stage run again after
+// the stages before it must do the work decode() did and allocate nothing.
+// The stages up to each one, that one twice (it must not spoil its own
+// inputs), then the later ones: the points must be the decode's, byte for
+// byte.
+TEST(DecoderAllocation, RepeatingAStageRedoesItsWorkAndAllocatesNothing)
+{
+    const hal::sim::SimRig rig = hal::sim::desktopRig();
+    const hal::sim::Scene scene =
+        hal::sim::makeScene(hal::sim::SceneKind::TexturedRelief, rig, hal::sim::Albedo::Coloured, 1);
+    hal::sim::RenderSettings settings;
+    settings.noiseSigma = 4;
+    hal::sim::Rendering frame;
+    ASSERT_TRUE(hal::sim::SceneRenderer(rig).render(scene, settings, frame));
+    const cv::Mat& image = frame.image;
+    const FrameView view{image.data, image.cols, image.rows, static_cast<std::ptrdiff_t>(image.step), PixelFormat::Bgr8};
+    auto decoder = pipeline::Decoder::create(rig.pattern, rig.rig);
+    ASSERT_TRUE(decoder);
+
+    const Status early = (*decoder)->repeatStage(pipeline::DecoderStage::Graph, view);
+    EXPECT_FALSE(early);
+    EXPECT_EQ(early.message(), "repeatStage: no frame was decoded yet (or the last decode failed)");
+
+    auto result = (*decoder)->decode(view);
+    ASSERT_TRUE(result);
+    const std::vector<pipeline::ScanPoint> expected(result->points.begin(), result->points.end());
+    ASSERT_GT(expected.size(), 20000u);
+
+    const cv::Mat other = image.clone();
+    const FrameView otherView{other.data, other.cols, other.rows, static_cast<std::ptrdiff_t>(other.step),
+                              PixelFormat::Bgr8};
+    const Status wrongFrame = (*decoder)->repeatStage(pipeline::DecoderStage::Graph, otherView);
+    EXPECT_FALSE(wrongFrame);
+    EXPECT_EQ(wrongFrame.message(), "repeatStage: the frame is not the one the last decode() decoded");
+
+    for (int first = 0; first < pipeline::kDecoderStageCount; ++first) {
+        // Counted around the decoder's calls only (gtest's messages allocate).
+        const long before = test::allocationCount();
+        bool ok = true;
+        for (int s = 0; s <= first; ++s)
+            ok = ok && (*decoder)->repeatStage(static_cast<pipeline::DecoderStage>(s), view).isOk();
+        for (int s = first; s < pipeline::kDecoderStageCount; ++s)
+            ok = ok && (*decoder)->repeatStage(static_cast<pipeline::DecoderStage>(s), view).isOk();
+        const long added = test::allocationCount() - before;
+        const char* name = pipeline::decoderStageName(static_cast<pipeline::DecoderStage>(first));
+        ASSERT_TRUE(ok) << name;
+        if (test::kCountingAllocations) {
+            EXPECT_EQ(added, 0) << name;
+        }
+        // The points of the last decode(), rewritten in place by the depth stage.
+        ASSERT_EQ(result->points.size(), expected.size()) << name;
+        EXPECT_EQ(std::memcmp(result->points.data(), expected.data(), expected.size() * sizeof(pipeline::ScanPoint)), 0)
+            << name;
+    }
 }
 
 TEST(DecoderAllocation, WorkspaceOfTheDesktopRigIsUnder34BytesPerPixel)
