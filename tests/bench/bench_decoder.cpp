@@ -13,6 +13,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 #include <string>
 #include <utility>
 #include <vector>
@@ -56,21 +57,28 @@ const BenchFrame* frameOrSkip(benchmark::State& state, FrameSize size)
     return frame;
 }
 
+// The decoder for the frame's rig, or null (the benchmark reports the error).
+std::unique_ptr<pipeline::Decoder> decoderOrSkip(benchmark::State& state, const BenchFrame& frame)
+{
+    auto decoder = pipeline::Decoder::create(frame.rig.pattern, frame.rig.rig);
+    if (!decoder) {
+        state.SkipWithError(decoder.message().c_str());
+        return nullptr;
+    }
+    return std::move(*decoder);
+}
+
 void decode(benchmark::State& state, FrameSize size)
 {
     const BenchFrame* frame = frameOrSkip(state, size);
-    if (!frame) return;
-    auto decoder = pipeline::Decoder::create(frame->rig.pattern, frame->rig.rig);
-    if (!decoder) {
-        state.SkipWithError(decoder.message().c_str());
-        return;
-    }
+    std::unique_ptr<pipeline::Decoder> decoder = frame ? decoderOrSkip(state, *frame) : nullptr;
+    if (!decoder) return;
     const FrameView view = viewOf(frame->rendering.image);
     std::vector<pipeline::StageTimings> timings;
     timings.reserve(100000);
     pipeline::DecodeResult last;
     for (auto _ : state) {
-        auto result = (*decoder)->decode(view);
+        auto result = decoder->decode(view);
         if (!result) {
             state.SkipWithError(result.message().c_str());
             break;
@@ -98,8 +106,8 @@ void decode(benchmark::State& state, FrameSize size)
     c["graph_edges"] = last.graphEdges;
     c["coverage"] = coverage;
     c["depth_err_rel"] = depthError;
-    c["workspace_bytes"] = static_cast<double>((*decoder)->workspaceBytes());
-    c["bytes_per_pixel"] = static_cast<double>((*decoder)->workspaceBytes()) / pixels;
+    c["workspace_bytes"] = static_cast<double>(decoder->workspaceBytes());
+    c["bytes_per_pixel"] = static_cast<double>(decoder->workspaceBytes()) / pixels;
     c["pixels"] = benchmark::Counter(pixels, benchmark::Counter::kIsIterationInvariantRate);
     // Stage medians from the decoder's own clock (StageTimings), in ms.
     const auto stage = [&](const char* name, double pipeline::StageTimings::*field) {
@@ -124,14 +132,10 @@ void decode(benchmark::State& state, FrameSize size)
 void stageAlone(benchmark::State& state, FrameSize size, pipeline::DecoderStage stage)
 {
     const BenchFrame* frame = frameOrSkip(state, size);
-    if (!frame) return;
-    auto decoder = pipeline::Decoder::create(frame->rig.pattern, frame->rig.rig);
-    if (!decoder) {
-        state.SkipWithError(decoder.message().c_str());
-        return;
-    }
+    std::unique_ptr<pipeline::Decoder> decoder = frame ? decoderOrSkip(state, *frame) : nullptr;
+    if (!decoder) return;
     const FrameView view = viewOf(frame->rendering.image);
-    if (auto result = (*decoder)->decode(view); !result) {
+    if (auto result = decoder->decode(view); !result) {
         state.SkipWithError(result.message().c_str());
         return;
     }
@@ -139,9 +143,9 @@ void stageAlone(benchmark::State& state, FrameSize size, pipeline::DecoderStage 
         state.PauseTiming();
         Status status;
         for (int s = 0; s < static_cast<int>(stage) && status; ++s)
-            status = (*decoder)->repeatStage(static_cast<pipeline::DecoderStage>(s), view);
+            status = decoder->repeatStage(static_cast<pipeline::DecoderStage>(s), view);
         state.ResumeTiming();
-        if (status) status = (*decoder)->repeatStage(stage, view);
+        if (status) status = decoder->repeatStage(stage, view);
         if (!status) {
             state.SkipWithError(status.message().c_str());
             break;
