@@ -444,13 +444,20 @@ private:
         const double weakBelow = ws_.params.nullEdgeRatio * referenceWeight;
         const int refStripe = f.reference >= 0 ? stripes_[f.reference] : -1;
         const bool nullEdges = refStripe >= 0 && std::abs(refStripe - f.stripe) == 1;
-        const int stripeCount = ws_.pattern.stripeCount();
+        const int stripe = f.stripe, stripeCount = ws_.pattern.stripeCount();
+        // Bit dir + 1 (direction from `from`: -1, 0, +1): whether an edge
+        // that way can give a hypothesis at all: across, the next stripe
+        // exists; along, null edges are possible.
+        const unsigned possible = (stripe - 1 >= 0) | (nullEdges << 1) | ((stripe + 1 < stripeCount) << 2);
+        // That, an edge weak exactly along the stripes, and a neighbour
+        // holding neither the stripe nor the next one (along, next is the
+        // stripe): the conditions of bestHypothesis's two cases as one
+        // expression.
         auto canGiveHypothesis = [&](const EdgeFeature& edge, int to) {
             const int toStripe = stripes_[to];
-            const int dir = static_cast<int>(directionFrom(edge, from, to)), next = f.stripe + dir;
+            const int dir = static_cast<int>(directionFrom(edge, from, to));
             const bool weak = edge.weight < weakBelow;
-            const bool across = (dir != 0) & !weak & (toStripe != next) & (next >= 0) & (next < stripeCount);
-            return (toStripe != f.stripe) & (across | ((dir == 0) & weak & nullEdges));
+            return (toStripe != stripe) & (toStripe != stripe + dir) & (weak == (dir == 0)) & (possible >> (dir + 1) & 1);
         };
         forEachEdgeWhere(from, canGiveHypothesis, [&](int e, int to) {
             const int toStripe = stripes_[to];
