@@ -378,52 +378,46 @@ private:
         return true;
     }
 
-    // The best way to reach `to` from decoded region `from` over edge `e` (in
-    // direction `dir` from `from`), if any; referenceWeight is the weight of
-    // the edge from `from`'s reference region (0 without one).
+    // The way to reach `to` from decoded region `from` over edge `e` (in
+    // direction `dir` from `from`) that pushNeighbours' filter let through,
+    // if any (else stripe -1); referenceWeight is the weight of the edge
+    // from `from`'s reference region (0 without one). The filter took the
+    // tests on the direction, the edge's weakness, the stripes' range and
+    // the reference's stripe, and left each edge one case.
     Hypothesis bestHypothesis(int from, int to, int e, EdgeDirection dir, float referenceWeight) const
     {
         const EdgeFeature& edge = features_[e];
         const StripePattern& pattern = ws_.pattern;
         const Region& f = ws_.regions[from];
-        Hypothesis best;
-        best.error = 1e30f;
-        // An edge as weak as a null edge (fig. 6) is no stripe step: its
+        // Across the stripes, an edge that is not weak: the next stripe. An
+        // edge as weak as a null edge (fig. 6) is no stripe step: its
         // colour change is noise, and the normalised noise fits some symbol
         // now and then (sphere: regions one stripe off along its rim).
-        const bool weak = edge.weight < ws_.params.nullEdgeRatio * referenceWeight;
-        if (dir != EdgeDirection::Parallel && !weak) {
-            const int stripe = f.stripe + (dir == EdgeDirection::Forward ? 1 : -1);
-            if (stripe >= 0 && stripe < pattern.stripeCount()) {
-                float q = 0;
-                const float error = edgeError(from, to, edge, stripeSymbol(pattern, f.stripe, stripe), &q);
-                best = {error, q, stripe, from};
-            }
+        if (dir != EdgeDirection::Parallel) {
+            const int stripe = f.stripe + static_cast<int>(dir);
+            float q = 0;
+            const float error = edgeError(from, to, edge, stripeSymbol(pattern, f.stripe, stripe), &q);
+            return {error, q, stripe, from};
         }
-        // Null edge (fig. 6): weak relative to the reference edge, and the
-        // (possibly virtual) edge reference -> `to` has the reference edge's symbol.
+        // Null edge (fig. 6): weak relative to the reference edge, the
+        // reference one stripe off, and the (possibly virtual) edge
+        // reference -> `to` has the reference edge's symbol.
         // Only along the stripes: across them the pattern changes at every
         // edge, and at low contrast a weak stripe edge taken for a null edge
         // slips the decoding by a stripe (photo texture, contrast 0.3:
         // patches 1-5 stripes off; inliers 77% -> 86%, outliers 0.20% ->
         // 0.10%, fan outliers 0.85% -> 0.72%).
-        if (f.reference >= 0 && dir == EdgeDirection::Parallel && weak) {
-            const Region& ref = ws_.regions[f.reference];
-            if (ref.stripe >= 0 && std::abs(ref.stripe - f.stripe) == 1) {
-                const SymbolCode expected = stripeSymbol(pattern, ref.stripe, f.stripe);
-                const EqualizedChange change = equalizedChange(ws_, f.reference, to);
-                if (optimalSymbol(change.c, t_) == expected) {
-                    const GraphEdge& border = ws_.edges[e];
-                    const float meanGradient =
-                        (border.primaryGradient + border.secondaryGradient) / std::max(border.borderCount, 1);
-                    const float error = matchError(change.c, expected, t_) +
-                                        kNullBorderWeight * meanGradient / std::max(referenceWeight, 1.0f);
-                    if (error < best.error)
-                        best = {error, beta_ * error / std::max(change.weight, 1.0f), f.stripe, f.reference};
-                }
-            }
-        }
-        return best;
+        Hypothesis none;
+        const Region& ref = ws_.regions[f.reference];
+        const SymbolCode expected = stripeSymbol(pattern, ref.stripe, f.stripe);
+        const EqualizedChange change = equalizedChange(ws_, f.reference, to);
+        if (optimalSymbol(change.c, t_) != expected) return none;
+        const GraphEdge& border = ws_.edges[e];
+        const float meanGradient = (border.primaryGradient + border.secondaryGradient) / std::max(border.borderCount, 1);
+        const float error =
+            matchError(change.c, expected, t_) + kNullBorderWeight * meanGradient / std::max(referenceWeight, 1.0f);
+        if (!(error < 1e30f)) return none;  // as a first candidate's error it had to beat 1e30
+        return {error, beta_ * error / std::max(change.weight, 1.0f), f.stripe, f.reference};
     }
 
     void pushNeighbours(int from)
@@ -460,10 +454,9 @@ private:
             return (toStripe != stripe) & (toStripe != stripe + dir) & (weak == (dir == 0)) & (possible >> (dir + 1) & 1);
         };
         forEachEdgeWhere(from, canGiveHypothesis, [&](int e, int to) {
-            const int toStripe = stripes_[to];
             const EdgeDirection dir = directionFrom(features_[e], from, to);
             const Hypothesis h = bestHypothesis(from, to, e, dir, referenceWeight);
-            if (h.stripe < 0 || h.stripe == toStripe) return true;
+            if (h.stripe < 0) return true;  // (the filter ruled out to's own stripe)
             int tokens = f.tokens;
             if (h.error < A_) {
                 tokens = std::min(tokens + 1, ws_.params.tokenBucketSize);
