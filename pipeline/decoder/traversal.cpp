@@ -284,6 +284,10 @@ private:
                 // the candidates' order (a repeated symbol gives the same
                 // error, which cannot be lower than the first time): the same
                 // for every edge at this end.
+                // Dead symbols (see deadSymbols) are left out, but count as
+                // seen.
+                const int endRegion = left ? path[begin] : path[end - 1];
+                std::int32_t& dead = deadSymbols(ws_.regions[endRegion], left);
                 std::array<SymbolCode, kSymbolCount> needed;
                 int neededCount = 0;
                 std::uint32_t seen = 0;
@@ -293,18 +297,8 @@ private:
                     if (stripeNext < 0 || stripeNext >= pattern.stripeCount()) continue;
                     const SymbolCode symbol = stripeSymbol(pattern, stripeHere, stripeNext);
                     needed[neededCount] = symbol;
-                    neededCount += !(seen >> symbol & 1);
+                    neededCount += !((seen | static_cast<std::uint32_t>(dead)) >> symbol & 1);
                     seen |= 1u << symbol;
-                }
-                const int endRegion = left ? path[begin] : path[end - 1];
-                std::int32_t& dead = deadSymbols(ws_.regions[endRegion], left);
-                {  // the needed symbols less the dead ones, in the same order
-                    int alive = 0;
-                    for (int k = 0; k < neededCount; ++k) {
-                        needed[alive] = needed[k];
-                        alive += !(dead >> needed[k] & 1);
-                    }
-                    neededCount = alive;
                 }
                 if (neededCount == 0) continue;
                 // The edges that can extend the path: the right direction, the
