@@ -9,8 +9,8 @@
 // from forEachBorder, without a branch per pixel, whose masks the first pass
 // stores for the second and for the graph and depth stages): the first counts each
 // region's pixels and sums their coordinates; the second, with the counts as
-// offsets (a counting sort by label), copies each run's pixels, 4 bytes each,
-// into the watershed's order buffer, where each region's pixels then lie
+// offsets (a counting sort by label), copies each run's pixels, 4 bytes each
+// (as value ^ 0x80, for signed compares), into the watershed's order buffer, where each region's pixels then lie
 // together, 3 free entries after each region's (a region's runs arrive in
 // order, so its write position moves through one cache line at a time).
 // Each region's medians are then selected from its own few hundred bytes,
@@ -39,8 +39,9 @@ namespace {
 constexpr int kRegionGap = 3;
 
 // The copy pass: each run's pixels, a pixel's 3 bytes and the next one in 4
-// bytes (the frame's last pixel has no next byte: 3 copied), to its region's
-// next positions, next[r] (advanced by the run's length).
+// bytes (the frame's last pixel has no next byte: 3 copied), each byte ^
+// 0x80 (channelMedians compares them as signed bytes), to its region's next
+// positions, next[r] (advanced by the run's length).
 //
 // Four pixels of 3 bytes at from (16 bytes read) to 4 bytes each, by one
 // byte shuffle (SSSE3 pshufb in the x86-64-v3 version, tbl on AArch64): 3
@@ -54,7 +55,7 @@ using Bytes16 = std::uint8_t __attribute__((vector_size(16)));
 {
     Bytes16 bytes;
     std::memcpy(&bytes, from, 16);
-    bytes = __builtin_shuffle(bytes, Bytes16{0, 1, 2, 3, 3, 4, 5, 6, 6, 7, 8, 9, 9, 10, 11, 12});
+    bytes = __builtin_shuffle(bytes, Bytes16{0, 1, 2, 3, 3, 4, 5, 6, 6, 7, 8, 9, 9, 10, 11, 12}) ^ 0x80;
     std::memcpy(to, &bytes, 16);
 }
 [[gnu::always_inline]] inline void fourPixelsShifted(std::uint32_t* to, const std::uint8_t* from)
@@ -63,7 +64,7 @@ using Bytes16 = std::uint8_t __attribute__((vector_size(16)));
     auto twoPixels = [](std::uint32_t* to, const std::uint8_t* from) {
         std::uint64_t bytes;
         std::memcpy(&bytes, from, 8);
-        bytes = (bytes & 0xffffffffu) | (bytes >> 24) << 32;
+        bytes = ((bytes & 0xffffffffu) | (bytes >> 24) << 32) ^ 0x8080808080808080u;
         std::memcpy(to, &bytes, 8);
     };
     twoPixels(to, from);
@@ -88,9 +89,14 @@ template <bool shuffled>
                 next[row[x]] += end - x;
                 const int whole = y + 1 == h && end == w ? end - 1 : end;
                 const std::uint8_t* pixel = pixels + 3 * x;
-#pragma GCC unroll 4
-                for (int i = x; i < whole; ++i, pixel += 3) std::memcpy(out++, pixel, 4);
-                if (whole < end) std::memcpy(out, pixel, 3);
+                auto copy = [&](int bytes) {
+                    std::uint32_t value = 0;
+                    std::memcpy(&value, pixel, bytes);
+                    value ^= 0x80808080u;
+                    std::memcpy(out++, &value, 4);
+                };
+                for (int i = x; i < whole; ++i, pixel += 3) copy(4);
+                if (whole < end) copy(3);
                 x = end;
             };
             forEachBit(masks, w - 1, [&](int last) { run(last + 1); });
