@@ -189,32 +189,25 @@ void computeRegions(DecoderWorkspace& ws)
     std::fill(sums, sums + 2 * static_cast<std::ptrdiff_t>(count), 0);
     std::fill(counter, counter + count, 0);
 
-    // Calls run(x, end, y, r) for each run [x, end) of label r in row y. The
-    // first pass stores the rows' border masks (ws.rowBorders), which the
-    // second pass and the graph and depth stages walk again.
+    // The first pass: each run's length and coordinate sums to its region's.
+    // It stores the rows' border masks (ws.rowBorders), which the copy pass
+    // and the graph and depth stages walk again.
     const int words = borderWords(w);
-    auto forEachRun = [&](bool first, auto run) {
-        for (int y = 0; y < h; ++y) {
-            const std::int32_t* row = label + static_cast<std::ptrdiff_t>(y) * w;
-            std::uint64_t* masks = ws.rowBorders + static_cast<std::ptrdiff_t>(y) * words;
-            int x = 0;
-            auto visit = [&](int last) {
-                run(x, last + 1, y, row[x]);
-                x = last + 1;
-            };
-            if (first)
-                forEachBorder(row, row + 1, w - 1, masks, visit);
-            else
-                forEachBit(masks, w - 1, visit);
-            run(x, w, y, row[x]);
-        }
-    };
-    forEachRun(true, [&](int x, int end, int y, std::int32_t r) {
-        const std::int64_t length = end - x;
-        counter[r] += static_cast<std::int32_t>(length);
-        sums[2 * r] += (x + end - 1) * length;  // twice the x sum (halved once per region)
-        sums[2 * r + 1] += y * length;
-    });
+    for (int y = 0; y < h; ++y) {
+        const std::int32_t* row = label + static_cast<std::ptrdiff_t>(y) * w;
+        std::uint64_t* masks = ws.rowBorders + static_cast<std::ptrdiff_t>(y) * words;
+        const std::int64_t y64 = y;
+        std::ptrdiff_t x = 0;
+        auto run = [&](std::ptrdiff_t end) {
+            const std::ptrdiff_t r = row[x], length = end - x;
+            counter[r] += static_cast<std::int32_t>(length);
+            sums[2 * r] += (x + end - 1) * length;  // twice the x sum (halved once per region)
+            sums[2 * r + 1] += y64 * length;
+            x = end;
+        };
+        forEachBorder(row, row + 1, w - 1, masks, [&](int last) { run(last + 1); });
+        run(w);
+    }
     std::int32_t offset = 0;
     for (int r = 0; r < count; ++r) {
         regions[r].pixelCount = counter[r];
