@@ -82,12 +82,12 @@ template <bool shuffled>
         const std::int32_t* row = ws.labels.get() + static_cast<std::ptrdiff_t>(y) * w;
         const std::uint8_t* pixels = ws.frame.row(y);
         const std::uint64_t* masks = ws.rowBorders + static_cast<std::ptrdiff_t>(y) * words;
-        int x = 0;
+        std::ptrdiff_t x = 0;
         if (y >= blockRows) {
-            auto run = [&](int end) {
+            auto run = [&](std::ptrdiff_t end) {
                 std::uint32_t* out = sorted + next[row[x]];
-                next[row[x]] += end - x;
-                const int whole = y + 1 == h && end == w ? end - 1 : end;
+                next[row[x]] += static_cast<std::int32_t>(end - x);
+                const std::ptrdiff_t whole = y + 1 == h && end == w ? end - 1 : end;
                 const std::uint8_t* pixel = pixels + 3 * x;
                 auto copy = [&](int bytes) {
                     std::uint32_t value = 0;
@@ -95,7 +95,7 @@ template <bool shuffled>
                     value ^= 0x80808080u;
                     std::memcpy(out++, &value, 4);
                 };
-                for (int i = x; i < whole; ++i, pixel += 3) copy(4);
+                for (std::ptrdiff_t i = x; i < whole; ++i, pixel += 3) copy(4);
                 if (whole < end) copy(3);
                 x = end;
             };
@@ -103,11 +103,10 @@ template <bool shuffled>
             run(w);
             continue;
         }
-        auto run = [&](int end) {
-            const std::int32_t r = row[x];
+        auto run = [&](std::ptrdiff_t end) {
+            const std::ptrdiff_t r = row[x], length = end - x;
             std::uint32_t* out = sorted + next[r];
-            const int length = end - x;
-            next[r] += length;
+            next[r] += static_cast<std::int32_t>(length);
             // The region's next cache line, which one of its next runs will
             // write (a row or two later): the first write to each line was a
             // miss to L3 or memory (the buffer is 4 bytes per pixel).
