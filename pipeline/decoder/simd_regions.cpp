@@ -71,7 +71,9 @@ template <class Step>
     case 0:
         break;
     default:
-        // No jump table bounds check (2 instructions per pass).
+        // Never (blocks <= 64): GCC's code around the jump is shorter
+        // than with a default case to jump to (780x580 medians of four
+        // 3.85 -> 3.49 M instructions per decode; the bounds check stays).
         __builtin_unreachable();
     }
 #undef STRIA_BLOCKS8
