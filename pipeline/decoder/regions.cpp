@@ -9,8 +9,8 @@
 // from forEachBorder, without a branch per pixel, whose masks the first pass
 // stores for the second and for the graph and depth stages): the first counts each
 // region's pixels and sums their coordinates; the second, with the counts as
-// offsets (a counting sort by label), copies each run's pixels, 4 bytes each,
-// into the watershed's order buffer, where each region's pixels then lie
+// offsets (a counting sort by label), copies each run's pixels, 4 bytes each
+// (as value ^ 0x80, for signed compares), into the watershed's order buffer, where each region's pixels then lie
 // together, 3 free entries after each region's (a region's runs arrive in
 // order, so its write position moves through one cache line at a time).
 // Each region's medians are then selected from its own few hundred bytes,
@@ -37,7 +37,137 @@ std::size_t regionScratchEntries(std::size_t regions)
 // after all gaps).
 namespace {
 constexpr int kRegionGap = 3;
+
+// The copy pass: each run's pixels, a pixel's 3 bytes and the next one in 4
+// bytes (the frame's last pixel has no next byte: 3 copied), each byte ^
+// 0x80 (channelMedians compares them as signed bytes), to its region's next
+// positions, next[r] (advanced by the run's length).
+//
+// Four pixels of 3 bytes at from (16 bytes read) to 4 bytes each, by one
+// byte shuffle (SSSE3 pshufb in the x86-64-v3 version, tbl on AArch64): 3
+// instructions per 4 pixels (with the tighter run loop, 780x580 copy pass
+// 5.5 -> 2.7 M instructions per decode). Without one (SSE2), two pixels per 8-byte load
+// and store, their 4 bytes apart by a shift (little-endian), 14 instructions:
+// half the loads and stores of a 4-byte copy per pixel (copy phase 780x580
+// 0.56 -> 0.53 ms, 1388x1038 1.66 -> 1.42 ms).
+using Bytes16 = std::uint8_t __attribute__((vector_size(16)));
+[[gnu::always_inline]] inline void fourPixelsShuffled(std::uint32_t* to, const std::uint8_t* from)
+{
+    Bytes16 bytes;
+    std::memcpy(&bytes, from, 16);
+    bytes = __builtin_shuffle(bytes, Bytes16{0, 1, 2, 3, 3, 4, 5, 6, 6, 7, 8, 9, 9, 10, 11, 12}) ^ 0x80;
+    std::memcpy(to, &bytes, 16);
 }
+[[gnu::always_inline]] inline void fourPixelsShifted(std::uint32_t* to, const std::uint8_t* from)
+{
+    static_assert(std::endian::native == std::endian::little);
+    auto twoPixels = [](std::uint32_t* to, const std::uint8_t* from) {
+        std::uint64_t bytes;
+        std::memcpy(&bytes, from, 8);
+        bytes = ((bytes & 0xffffffffu) | (bytes >> 24) << 32) ^ 0x8080808080808080u;
+        std::memcpy(to, &bytes, 8);
+    };
+    twoPixels(to, from);
+    twoPixels(to + 2, from + 6);
+}
+
+template <bool shuffled>
+[[gnu::always_inline]] inline void copyRuns(const DecoderWorkspace& ws, std::uint32_t* sorted, std::int32_t* next)
+{
+    const int w = ws.width, h = ws.height, words = borderWords(w);
+    // Rows whose next row has 25 bytes or more (the whole blocks read up to
+    // 25 bytes past a row's end).
+    const int blockRows = w >= 9 ? h - 1 : 0;
+    for (int y = 0; y < h; ++y) {
+        const std::int32_t* row = ws.labels.get() + static_cast<std::ptrdiff_t>(y) * w;
+        const std::uint8_t* pixels = ws.frame.row(y);
+        const std::uint64_t* masks = ws.rowBorders + static_cast<std::ptrdiff_t>(y) * words;
+        std::ptrdiff_t x = 0;
+        if (y >= blockRows) {
+            auto run = [&](std::ptrdiff_t end) {
+                std::uint32_t* out = sorted + next[row[x]];
+                next[row[x]] += static_cast<std::int32_t>(end - x);
+                const std::ptrdiff_t whole = y + 1 == h && end == w ? end - 1 : end;
+                const std::uint8_t* pixel = pixels + 3 * x;
+                auto copy = [&](int bytes) {
+                    std::uint32_t value = 0;
+                    std::memcpy(&value, pixel, bytes);
+                    value ^= 0x80808080u;
+                    std::memcpy(out++, &value, 4);
+                };
+                for (std::ptrdiff_t i = x; i < whole; ++i, pixel += 3) copy(4);
+                if (whole < end) copy(3);
+                x = end;
+            };
+            forEachBit(masks, w - 1, [&](int last) { run(last + 1); });
+            run(w);
+            continue;
+        }
+        auto run = [&](std::ptrdiff_t end) {
+            const std::ptrdiff_t r = row[x], length = end - x;
+            std::uint32_t* out = sorted + next[r];
+            next[r] += static_cast<std::int32_t>(length);
+            // The region's next cache line, which one of its next runs will
+            // write (a row or two later): the first write to each line was a
+            // miss to L3 or memory (the buffer is 4 bytes per pixel).
+            __builtin_prefetch(out + length + 16, 1);
+            // Whole blocks of 4: up to 3 pixels past the run land in the
+            // region's own later positions, which its later runs overwrite,
+            // or in the gap after it (kRegionGap: before the gaps, a run
+            // near its region's end took the pixel loop, a branch that was
+            // mispredicted 9 k times per 780x580 decode).
+            // The first two blocks without a loop, the second into a sink
+            // where the run has at most 4 pixels (selected, not branched on:
+            // run lengths are noise to a branch predictor, and a loop's exit
+            // was mispredicted on most runs; 780x580: -18 k mispredictions,
+            // copy phase 0.59 -> 0.51 ms). They read at most 25 bytes past
+            // the row's end (inside the next row). Runs of more than 8 pixels
+            // loop over the rest.
+            const std::uint8_t* pixel = pixels + 3 * x;
+            auto block = [&](std::uint32_t* to, int i) {
+                if constexpr (shuffled)
+                    fourPixelsShuffled(to, pixel + 3 * i);
+                else
+                    fourPixelsShifted(to, pixel + 3 * i);
+            };
+            std::uint32_t sink[4];
+            std::uint32_t* second = length > 4 ? out + 4 : sink;
+            // Hidden from GCC, which would otherwise see the sink's stores
+            // as dead and branch around the second block.
+            asm("" : "+r"(second));
+            block(out, 0);
+            block(second, 4);
+            for (int i = 8; i < length; i += 4) block(out + i, i);
+            x = end;
+        };
+        forEachBit(masks, w - 1, [&](int last) { run(last + 1); });
+        run(w);
+    }
+}
+
+#if defined(__x86_64__)
+// SSE2 has no byte shuffle: the x86-64-v3 version (picked at run time by
+// GCC's function multiversioning, an ifunc) has SSSE3's.
+[[gnu::target("default")]] void copyRunsVersion(const DecoderWorkspace& ws, std::uint32_t* sorted, std::int32_t* next)
+{
+    copyRuns<false>(ws, sorted, next);
+}
+[[gnu::target("arch=x86-64-v3")]] void copyRunsVersion(const DecoderWorkspace& ws, std::uint32_t* sorted,
+                                                        std::int32_t* next)
+{
+    copyRuns<true>(ws, sorted, next);
+}
+#else
+void copyRunsVersion(const DecoderWorkspace& ws, std::uint32_t* sorted, std::int32_t* next)
+{
+#if defined(__aarch64__)
+    copyRuns<true>(ws, sorted, next);
+#else
+    copyRuns<false>(ws, sorted, next);
+#endif
+}
+#endif
+}  // namespace
 
 std::size_t regionOrderEntries(std::size_t pixels, std::size_t regions)
 {
@@ -58,32 +188,25 @@ void computeRegions(DecoderWorkspace& ws)
     std::fill(sums, sums + 2 * static_cast<std::ptrdiff_t>(count), 0);
     std::fill(counter, counter + count, 0);
 
-    // Calls run(x, end, y, r) for each run [x, end) of label r in row y. The
-    // first pass stores the rows' border masks (ws.rowBorders), which the
-    // second pass and the graph and depth stages walk again.
+    // The first pass: each run's length and coordinate sums to its region's.
+    // It stores the rows' border masks (ws.rowBorders), which the copy pass
+    // and the graph and depth stages walk again.
     const int words = borderWords(w);
-    auto forEachRun = [&](bool first, auto run) {
-        for (int y = 0; y < h; ++y) {
-            const std::int32_t* row = label + static_cast<std::ptrdiff_t>(y) * w;
-            std::uint64_t* masks = ws.rowBorders + static_cast<std::ptrdiff_t>(y) * words;
-            int x = 0;
-            auto visit = [&](int last) {
-                run(x, last + 1, y, row[x]);
-                x = last + 1;
-            };
-            if (first)
-                forEachBorder(row, row + 1, w - 1, masks, visit);
-            else
-                forEachBit(masks, w - 1, visit);
-            run(x, w, y, row[x]);
-        }
-    };
-    forEachRun(true, [&](int x, int end, int y, std::int32_t r) {
-        const std::int64_t length = end - x;
-        counter[r] += static_cast<std::int32_t>(length);
-        sums[2 * r] += (x + end - 1) * length;  // twice the x sum (halved once per region)
-        sums[2 * r + 1] += y * length;
-    });
+    for (int y = 0; y < h; ++y) {
+        const std::int32_t* row = label + static_cast<std::ptrdiff_t>(y) * w;
+        std::uint64_t* masks = ws.rowBorders + static_cast<std::ptrdiff_t>(y) * words;
+        const std::int64_t y64 = y;
+        std::ptrdiff_t x = 0;
+        auto run = [&](std::ptrdiff_t end) {
+            const std::ptrdiff_t r = row[x], length = end - x;
+            counter[r] += static_cast<std::int32_t>(length);
+            sums[2 * r] += (x + end - 1) * length;  // twice the x sum (halved once per region)
+            sums[2 * r + 1] += y64 * length;
+            x = end;
+        };
+        forEachBorder(row, row + 1, w - 1, masks, [&](int last) { run(last + 1); });
+        run(w);
+    }
     std::int32_t offset = 0;
     for (int r = 0; r < count; ++r) {
         regions[r].pixelCount = counter[r];
@@ -94,58 +217,8 @@ void computeRegions(DecoderWorkspace& ws)
         offset += regions[r].pixelCount + kRegionGap;
     }
 
-    // A pixel's 3 bytes and the next one in 4 bytes (the frame's last pixel
-    // has no next byte: 3 copied).
     auto* sorted = reinterpret_cast<std::uint32_t*>(ws.pixelOrder);
-    const int blockRows = w >= 8 ? h - 1 : 0;  // rows whose next row has 23 bytes
-    forEachRun(false, [&](int x, int end, int y, std::int32_t r) {
-        const std::uint8_t* pixel = ws.frame.row(y) + 3 * x;
-        std::uint32_t* out = sorted + counter[r];
-        counter[r] += end - x;
-        // The region's next cache line, which one of its next runs will
-        // write (a row or two later): the first write to each line was a
-        // miss to L3 or memory (the buffer is 4 bytes per pixel).
-        __builtin_prefetch(sorted + counter[r] + 16, 1);
-        if (y < blockRows) {
-            // Whole blocks of 4: up to 3 pixels past the run land in the
-            // region's own later positions, which its later runs overwrite,
-            // or in the gap after it (kRegionGap: before the gaps, a run
-            // near its region's end took the pixel loop, a branch that was
-            // mispredicted 9 k times per 780x580 decode).
-            // Two pixels per 8-byte load and store, their 4 bytes apart by
-            // a shift (little-endian): half the loads and stores of a 4-byte
-            // copy per pixel (copy phase 780x580 0.56 -> 0.53 ms, 1388x1038
-            // 1.66 -> 1.42 ms).
-            static_assert(std::endian::native == std::endian::little);
-            auto twoPixels = [](std::uint32_t* to, const std::uint8_t* from) {
-                std::uint64_t bytes;
-                std::memcpy(&bytes, from, 8);
-                bytes = (bytes & 0xffffffffu) | (bytes >> 24) << 32;
-                std::memcpy(to, &bytes, 8);
-            };
-            auto block = [&](std::uint32_t* to, int i) {
-                twoPixels(to, pixel + 3 * i);
-                twoPixels(to + 2, pixel + 3 * i + 6);
-            };
-            // The first two blocks without a loop, the second into a sink
-            // where the run has at most 4 pixels (selected, not branched on:
-            // run lengths are noise to a branch predictor, and a loop's exit
-            // was mispredicted on most runs; 780x580: -18 k mispredictions,
-            // copy phase 0.59 -> 0.51 ms). They read at most 23 bytes past
-            // the row's end (inside the next row). Runs of more than 8 pixels
-            // loop over the rest.
-            std::uint32_t sink[4];
-            const int length = end - x;
-            block(out, 0);
-            block(length > 4 ? out + 4 : sink, 4);
-            for (int i = 8; i < length; i += 4) block(out + i, i);
-            return;
-        }
-        const int whole = y + 1 == h && end == w ? end - 1 : end;
-#pragma GCC unroll 4
-        for (int i = x; i < whole; ++i, pixel += 3) std::memcpy(out++, pixel, 4);
-        if (whole < end) std::memcpy(out, pixel, 3);
-    });
+    copyRunsVersion(ws, sorted, counter);
 
     // Regions of up to 255 pixels four at a time (channelMediansOfFour
     // overlaps their searches), larger ones alone. They read up to 4 pixels

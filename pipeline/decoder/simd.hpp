@@ -97,8 +97,9 @@ void projectedGradientWindows(const std::uint8_t* row, int width, const std::int
                               const cv::Matx33f& m, std::array<float, kWindowSamples + 1>* out);
 
 // Region colours (regions.cpp): per byte k < 3 of count >= 1 pixels of 4
-// bytes (a frame pixel's 3 and one more), the median of the pixels' byte k:
-// the value at index count / 2 of them sorted. channelMedians reads whole
+// bytes (a frame pixel's 3 and one more, each stored as value ^ 0x80: signed
+// bytes in the values' order), the median of the pixels' values k: the value
+// at index count / 2 of them sorted. channelMedians reads whole
 // blocks of 4 pixels and the block after them: up to 4 pixels past the last
 // must be readable.
 std::array<std::uint8_t, 3> channelMediansReference(const std::uint32_t* pixels, int count);

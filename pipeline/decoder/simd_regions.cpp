@@ -17,7 +17,7 @@ std::array<std::uint8_t, 3> channelMediansReference(const std::uint32_t* pixels,
     std::array<std::uint8_t, 3> median{};
     for (int k = 0; k < 3; ++k) {
         std::array<std::int32_t, 256> histogram{};
-        for (int i = 0; i < count; ++i) ++histogram[bytes[4 * i + k]];
+        for (int i = 0; i < count; ++i) ++histogram[bytes[4 * i + k] ^ 0x80];
         int v = 0;
         for (int seen = histogram[0]; seen <= count / 2; seen += histogram[++v]) {}
         median[k] = static_cast<std::uint8_t>(v);
@@ -36,11 +36,16 @@ alignas(16) constexpr std::uint8_t kLeadingLanes[32] = {255, 255, 255, 255, 255,
 // count / 2 values below t: found bit by bit from the top, each step one
 // counting pass over the pixels (4 pixels' 3 channels per compare, no
 // branch per value; a region's ~256 bytes stay in L1 for the 8 passes).
+// The pixels' bytes are the values ^ 0x80 (the copy pass stores them so):
+// the compares count the values at least t as signed bytes greater than
+// (t - 1) ^ 0x80, 3 instructions per block with SSE2 (load, compare,
+// subtract), where an unsigned compare took 4 (780x580 medians 6.09 ->
+// 5.16 M instructions per decode, the copy pass's xor +0.16 M).
 // A pass's counts go to 2 or 4 accumulators in turn: with one, its chain of
 // dependent subtractions (1 cycle each) was the bound, not the compares
 // (780x580 medians 0.66 -> 0.48 ms, 1388x1038 1.70 -> 1.28 ms).
 
-// Calls step(b) for b = blocks - 1 down to 0, blocks <= 64, by a jump into
+// Calls step(b) for b = blocks - 1 down to 0, 0 <= blocks <= 64, by a jump into
 // straight-line code (Duff's device): the 8 passes over a region take the
 // same jump, which is predicted after the first, where a loop's exit was
 // mispredicted in most passes.
@@ -63,8 +68,13 @@ template <class Step>
         STRIA_BLOCKS8(17)
         STRIA_BLOCKS8(9)
         STRIA_BLOCKS8(1)
-    default:
+    case 0:
         break;
+    default:
+        // Never (blocks <= 64): GCC's code around the jump is shorter
+        // than with a default case to jump to (780x580 medians of four
+        // 3.85 -> 3.49 M instructions per decode; the bounds check stays).
+        __builtin_unreachable();
     }
 #undef STRIA_BLOCKS8
 #undef STRIA_BLOCK
@@ -77,9 +87,13 @@ inline Bytes zeroBytes() { return vdupq_n_u8(0); }
 inline Bytes add(Bytes a, Bytes b) { return vaddq_u8(a, b); }
 inline Bytes sub(Bytes a, Bytes b) { return vsubq_u8(a, b); }
 inline Bytes bitAnd(Bytes a, Bytes b) { return vandq_u8(a, b); }
-// All ones in the lanes of x below limit.
-inline Bytes below(const std::uint8_t* x, Bytes limit) { return vcltq_u8(vld1q_u8(x), limit); }
-inline Bytes limitOf(std::uint32_t t) { return vreinterpretq_u8_u32(vdupq_n_u32(t)); }
+// All ones in the lanes of x at least the limit's t: x > t - 1 as signed
+// bytes (x = value ^ 0x80, the limit is (t - 1) ^ 0x80 = t + 0x7f).
+inline Bytes atLeast(const std::uint8_t* x, Bytes limit)
+{
+    return vcgtq_s8(vreinterpretq_s8_u8(vld1q_u8(x)), vreinterpretq_s8_u8(limit));
+}
+inline Bytes limitOf(std::uint32_t t) { return vaddq_u8(vreinterpretq_u8_u32(vdupq_n_u32(t)), vdupq_n_u8(0x7f)); }
 // Each byte position's sum over the four pixels, in 16 bits.
 inline std::array<int, 3> pixelSums(Bytes counts)
 {
@@ -93,20 +107,44 @@ inline std::array<int, 3> pixelSums(Bytes counts)
 struct ByteSearch {
     const std::uint8_t* bytes;
     int blocks;
-    Bytes restLanes, half, m;
+    Bytes restLanes, need, m;
 };
 inline Bytes firstBit() { return vdupq_n_u8(128); }
 inline Bytes nextBit(Bytes bit) { return vshrq_n_u8(bit, 1); }
-inline Bytes searchLimit(const ByteSearch& s, Bytes bit) { return vorrq_u8(s.m, bit); }
+inline Bytes searchLimit(const ByteSearch& s, Bytes bit) { return vaddq_u8(vorrq_u8(s.m, bit), vdupq_n_u8(0x7f)); }
 inline void searchStep(ByteSearch& s, Bytes bit, Bytes counts)
 {
     counts = vaddq_u8(counts, vextq_u8(counts, counts, 8));
     counts = vaddq_u8(counts, vextq_u8(counts, counts, 4));
-    s.m = vorrq_u8(s.m, vandq_u8(bit, vcleq_u8(counts, s.half)));
+    s.m = vorrq_u8(s.m, vandq_u8(bit, vcgeq_u8(counts, s.need)));
 }
 inline std::array<std::uint8_t, 3> searchResult(const ByteSearch& s)
 {
     return {vgetq_lane_u8(s.m, 0), vgetq_lane_u8(s.m, 1), vgetq_lane_u8(s.m, 2)};
+}
+// Four regions' searches in the 4-byte lanes (dwords) j of one vector each.
+inline Bytes limitsOf(Bytes m, Bytes bit) { return vaddq_u8(vorrq_u8(m, bit), vdupq_n_u8(0x7f)); }
+template <int j>
+inline Bytes dwordOf(Bytes v)
+{
+    return vreinterpretq_u8_u32(vdupq_n_u32(vgetq_lane_u32(vreinterpretq_u32_u8(v), j)));
+}
+inline Bytes dwordsOf(const std::array<std::uint32_t, 4>& v) { return vreinterpretq_u8_u32(vld1q_u32(v.data())); }
+// Dword j: the bytewise sum of counts j's 4 dwords.
+inline Bytes sumsOfFour(Bytes c0, Bytes c1, Bytes c2, Bytes c3)
+{
+    const uint32x4x2_t a = vzipq_u32(vreinterpretq_u32_u8(c0), vreinterpretq_u32_u8(c1));  // c0 c1 c0 c1
+    const uint32x4x2_t b = vzipq_u32(vreinterpretq_u32_u8(c2), vreinterpretq_u32_u8(c3));
+    const Bytes s0 = vaddq_u8(vreinterpretq_u8_u32(a.val[0]), vreinterpretq_u8_u32(a.val[1]));
+    const Bytes s1 = vaddq_u8(vreinterpretq_u8_u32(b.val[0]), vreinterpretq_u8_u32(b.val[1]));
+    return vaddq_u8(vcombine_u8(vget_low_u8(s0), vget_low_u8(s1)), vcombine_u8(vget_high_u8(s0), vget_high_u8(s1)));
+}
+inline Bytes stepOfFour(Bytes m, Bytes bit, Bytes sums, Bytes need) { return vorrq_u8(m, vandq_u8(bit, vcgeq_u8(sums, need))); }
+inline std::uint32_t dword(Bytes v, int j)
+{
+    std::array<std::uint32_t, 4> d;
+    vst1q_u32(d.data(), vreinterpretq_u32_u8(v));
+    return d[j];
 }
 #else
 using Bytes = __m128i;
@@ -115,10 +153,12 @@ inline Bytes zeroBytes() { return _mm_setzero_si128(); }
 inline Bytes add(Bytes a, Bytes b) { return _mm_add_epi8(a, b); }
 inline Bytes sub(Bytes a, Bytes b) { return _mm_sub_epi8(a, b); }
 inline Bytes bitAnd(Bytes a, Bytes b) { return _mm_and_si128(a, b); }
-// x < t as max(x, t - 1) == t - 1 (SSE2 has no unsigned byte comparison):
-// the limit is t - 1.
-inline Bytes below(const std::uint8_t* x, Bytes limit) { return _mm_cmpeq_epi8(_mm_max_epu8(loadBytes(x), limit), limit); }
-inline Bytes limitOf(std::uint32_t t) { return _mm_sub_epi8(_mm_set1_epi32(static_cast<int>(t)), _mm_set1_epi8(1)); }
+// All ones in the lanes of x at least the limit's t: x > t - 1 as signed
+// bytes (x = value ^ 0x80, the limit is (t - 1) ^ 0x80 = t + 0x7f). SSE2 has
+// no unsigned byte comparison: max(x, t - 1) == t - 1 on the values took one
+// instruction more per block (a copy of the limit or of x).
+inline Bytes atLeast(const std::uint8_t* x, Bytes limit) { return _mm_cmpgt_epi8(loadBytes(x), limit); }
+inline Bytes limitOf(std::uint32_t t) { return _mm_add_epi8(_mm_set1_epi32(static_cast<int>(t)), _mm_set1_epi8(0x7f)); }
 inline std::array<int, 3> pixelSums(Bytes counts)
 {
     const __m128i zero = _mm_setzero_si128();
@@ -130,23 +170,53 @@ inline std::array<int, 3> pixelSums(Bytes counts)
 struct ByteSearch {
     const std::uint8_t* bytes;
     int blocks;
-    Bytes restLanes, half, m;
+    Bytes restLanes, need, m;
 };
 inline Bytes firstBit() { return _mm_set1_epi8(static_cast<char>(128)); }
 // bit >> 1 in 16-bit lanes: no bit crosses into the next byte.
 inline Bytes nextBit(Bytes bit) { return _mm_srli_epi16(bit, 1); }
-inline Bytes searchLimit(const ByteSearch& s, Bytes bit) { return _mm_sub_epi8(_mm_or_si128(s.m, bit), _mm_set1_epi8(1)); }
+inline Bytes searchLimit(const ByteSearch& s, Bytes bit) { return _mm_add_epi8(_mm_or_si128(s.m, bit), _mm_set1_epi8(0x7f)); }
 inline void searchStep(ByteSearch& s, Bytes bit, Bytes counts)
 {
     counts = _mm_add_epi8(counts, _mm_shuffle_epi32(counts, _MM_SHUFFLE(1, 0, 3, 2)));
     counts = _mm_add_epi8(counts, _mm_shuffle_epi32(counts, _MM_SHUFFLE(2, 3, 0, 1)));
-    // counts <= count / 2 as min(counts, half) == counts.
-    s.m = _mm_or_si128(s.m, _mm_and_si128(bit, _mm_cmpeq_epi8(_mm_min_epu8(counts, s.half), counts)));
+    // counts >= need as max(counts, need) == counts.
+    s.m = _mm_or_si128(s.m, _mm_and_si128(bit, _mm_cmpeq_epi8(_mm_max_epu8(counts, s.need), counts)));
 }
 inline std::array<std::uint8_t, 3> searchResult(const ByteSearch& s)
 {
     const auto v = static_cast<std::uint32_t>(_mm_cvtsi128_si32(s.m));
     return {static_cast<std::uint8_t>(v), static_cast<std::uint8_t>(v >> 8), static_cast<std::uint8_t>(v >> 16)};
+}
+// Four regions' searches in the 4-byte lanes (dwords) j of one vector each.
+inline Bytes limitsOf(Bytes m, Bytes bit) { return _mm_add_epi8(_mm_or_si128(m, bit), _mm_set1_epi8(0x7f)); }
+template <int j>
+inline Bytes dwordOf(Bytes v)
+{
+    return _mm_shuffle_epi32(v, j * 0x55);
+}
+inline Bytes dwordsOf(const std::array<std::uint32_t, 4>& v)
+{
+    return _mm_setr_epi32(static_cast<int>(v[0]), static_cast<int>(v[1]), static_cast<int>(v[2]), static_cast<int>(v[3]));
+}
+// Dword j: the bytewise sum of counts j's 4 dwords.
+inline Bytes sumsOfFour(Bytes c0, Bytes c1, Bytes c2, Bytes c3)
+{
+    // c0 c1 c0 c1 (dwords 0 and 2 plus 1 and 3), the same for c2 c3.
+    const Bytes s0 = _mm_add_epi8(_mm_unpacklo_epi32(c0, c1), _mm_unpackhi_epi32(c0, c1));
+    const Bytes s1 = _mm_add_epi8(_mm_unpacklo_epi32(c2, c3), _mm_unpackhi_epi32(c2, c3));
+    return _mm_add_epi8(_mm_unpacklo_epi64(s0, s1), _mm_unpackhi_epi64(s0, s1));
+}
+// sums >= need as max(sums, need) == sums.
+inline Bytes stepOfFour(Bytes m, Bytes bit, Bytes sums, Bytes need)
+{
+    return _mm_or_si128(m, _mm_and_si128(bit, _mm_cmpeq_epi8(_mm_max_epu8(sums, need), sums)));
+}
+inline std::uint32_t dword(Bytes v, int j)
+{
+    alignas(16) std::array<std::uint32_t, 4> d;
+    _mm_store_si128(reinterpret_cast<__m128i*>(d.data()), v);
+    return d[j];
 }
 #endif
 
@@ -154,38 +224,46 @@ inline std::array<std::uint8_t, 3> searchResult(const ByteSearch& s)
 // the rest (the block after the last is read even where none do).
 inline Bytes restLanesOf(int count)
 {
-    return loadBytes(kLeadingLanes + 16 - 4 * (count - 4 * (count / 4)));
+    return loadBytes(kLeadingLanes + 16 - 4 * (static_cast<unsigned>(count) % 4));
 }
 
 inline ByteSearch startSearch(const std::uint32_t* pixels, int count)
 {
+    // At most count / 2 below t: at least count - count / 2 from t on.
 #if defined(__ARM_NEON)
-    const Bytes half = vdupq_n_u8(static_cast<std::uint8_t>(count / 2));
+    const Bytes need = vdupq_n_u8(static_cast<std::uint8_t>(count - count / 2));
 #else
-    const Bytes half = _mm_set1_epi8(static_cast<char>(count / 2));
+    const Bytes need = _mm_set1_epi8(static_cast<char>(count - count / 2));
 #endif
-    return {reinterpret_cast<const std::uint8_t*>(pixels), count / 4, restLanesOf(count), half, zeroBytes()};
+    return {reinterpret_cast<const std::uint8_t*>(pixels), static_cast<int>(static_cast<unsigned>(count) / 4),
+            restLanesOf(count), need, zeroBytes()};
 }
 
-// One pass of a search: its counts below the next limit, then its next bit.
-[[gnu::always_inline]] inline void searchPass(ByteSearch& s, Bytes bit)
+// The counts of a search's pixels from limit on (per byte position of the
+// 4 pixels of a block).
+[[gnu::always_inline]] inline Bytes passCounts(const ByteSearch& s, Bytes limit)
 {
-    const Bytes limit = searchLimit(s, bit);
-    Bytes even = sub(zeroBytes(), bitAnd(below(s.bytes + 16 * s.blocks, limit), s.restLanes)), odd = zeroBytes();
+    Bytes even = sub(zeroBytes(), bitAnd(atLeast(s.bytes + 16 * s.blocks, limit), s.restLanes)), odd = zeroBytes();
     forBlocksDown(s.blocks, [&](int b) {
         Bytes& counts = b & 1 ? odd : even;
-        counts = sub(counts, below(s.bytes + 16 * b, limit));
+        counts = sub(counts, atLeast(s.bytes + 16 * b, limit));
     });
-    searchStep(s, bit, add(even, odd));
+    return add(even, odd);
+}
+
+// One pass of a search: its counts from the next limit on, then its next bit.
+[[gnu::always_inline]] inline void searchPass(ByteSearch& s, Bytes bit)
+{
+    searchStep(s, bit, passCounts(s, searchLimit(s, bit)));
 }
 
 // Per byte k < 3 of the pixels (blocks whole blocks of 4, then the lanes of
-// the next block in restLanes), how many are below t[k] (1 <= t[k] <= 255).
+// the next block in restLanes), how many are at least t[k] (1 <= t[k] <= 255).
 // blocks <= 254: the per-lane byte counters cannot overflow.
-inline std::array<int, 3> countBelow(const std::uint8_t* bytes, int blocks, Bytes restLanes, const std::array<int, 3>& t)
+inline std::array<int, 3> countAtLeast(const std::uint8_t* bytes, int blocks, Bytes restLanes, const std::array<int, 3>& t)
 {
     const Bytes limit = limitOf(static_cast<std::uint32_t>(t[0] | t[1] << 8 | t[2] << 16));
-    Bytes c[4] = {sub(zeroBytes(), bitAnd(below(bytes + 16 * blocks, limit), restLanes)), zeroBytes(), zeroBytes(),
+    Bytes c[4] = {sub(zeroBytes(), bitAnd(atLeast(bytes + 16 * blocks, limit), restLanes)), zeroBytes(), zeroBytes(),
                   zeroBytes()};
     // Duff's device: a loop of 64 blocks per step, entered by a jump into
     // its body so the first step takes the blocks past whole 64s (the same
@@ -199,7 +277,7 @@ inline std::array<int, 3> countBelow(const std::uint8_t* bytes, int blocks, Byte
     // Byte offset of the step's block 0 (negative in the first step, whose
     // blocks 64 - first .. 63 are the region's first).
     std::ptrdiff_t at = 16 * static_cast<std::ptrdiff_t>(first - 64);
-#define STRIA_COUNT(i) c[(i) & 3] = sub(c[(i) & 3], below(bytes + (at + 16 * (i)), limit))
+#define STRIA_COUNT(i) c[(i) & 3] = sub(c[(i) & 3], atLeast(bytes + (at + 16 * (i)), limit))
 #define STRIA_BLOCK(i) \
     case 64 - (i):     \
         STRIA_COUNT(i); \
@@ -252,15 +330,16 @@ std::array<std::uint8_t, 3> channelMedians(const std::uint32_t* pixels, int coun
     std::array<int, 3> m{};
     for (int bit = 128; bit > 0; bit >>= 1) {
         const std::array<int, 3> t{m[0] | bit, m[1] | bit, m[2] | bit};
-        std::array<int, 3> below{};
+        std::array<int, 3> notBelow{};
         for (int first = 0;; first += 254) {
             const int chunk = std::min(254, blocks - first);
             const bool last = first + chunk == blocks;
-            const std::array<int, 3> part = countBelow(bytes + 16 * first, chunk, last ? restLanes : noLanes, t);
-            for (int k = 0; k < 3; ++k) below[k] += part[k];
+            const std::array<int, 3> part = countAtLeast(bytes + 16 * first, chunk, last ? restLanes : noLanes, t);
+            for (int k = 0; k < 3; ++k) notBelow[k] += part[k];
             if (last) break;
         }
-        for (int k = 0; k < 3; ++k) m[k] |= below[k] <= count / 2 ? bit : 0;
+        // At most count / 2 below t.
+        for (int k = 0; k < 3; ++k) m[k] |= notBelow[k] >= count - count / 2 ? bit : 0;
     }
     return {static_cast<std::uint8_t>(m[0]), static_cast<std::uint8_t>(m[1]), static_cast<std::uint8_t>(m[2])};
 #else
@@ -277,14 +356,34 @@ std::array<std::array<std::uint8_t, 3>, 4> channelMediansOfFour(const std::array
         // Each pass ends in a chain of dependent steps (the sums over the
         // pixels, the next limit), which the other regions' compares
         // overlap (780x580 medians 0.46 -> 0.42 ms, from two at a time).
+        // The four take these steps together, region j's in dword j of m
+        // (its medians so far) and need: the sums over each region's 4
+        // pixels as a transposition, one compare for the four (780x580
+        // medians of four 3.49 -> 3.08 M instructions per decode, 2.99 with
+        // the unsigned divisions of the set-up).
         std::array<ByteSearch, 4> searches;
-        for (int j = 0; j < 4; ++j) searches[j] = startSearch(pixels[j], counts[j]);
-        Bytes bit = firstBit();
-        for (int pass = 0; pass < 8; ++pass, bit = nextBit(bit)) {
-#pragma GCC unroll 4
-            for (ByteSearch& s : searches) searchPass(s, bit);
+        std::array<std::uint32_t, 4> needs;
+        for (int j = 0; j < 4; ++j) {
+            searches[j] = startSearch(pixels[j], counts[j]);
+            // At most count / 2 below t: at least count - count / 2 from t on.
+            const auto n = static_cast<std::uint32_t>(counts[j]);  // >= 1
+            needs[j] = (n - n / 2) * 0x01010101u;
         }
-        for (int j = 0; j < 4; ++j) medians[j] = searchResult(searches[j]);
+        const Bytes need = dwordsOf(needs);
+        Bytes m = zeroBytes(), bit = firstBit();
+        for (int pass = 0; pass < 8; ++pass, bit = nextBit(bit)) {
+            const Bytes limits = limitsOf(m, bit);
+            const Bytes c0 = passCounts(searches[0], dwordOf<0>(limits));
+            const Bytes c1 = passCounts(searches[1], dwordOf<1>(limits));
+            const Bytes c2 = passCounts(searches[2], dwordOf<2>(limits));
+            const Bytes c3 = passCounts(searches[3], dwordOf<3>(limits));
+            m = stepOfFour(m, bit, sumsOfFour(c0, c1, c2, c3), need);
+        }
+        for (int j = 0; j < 4; ++j) {
+            const std::uint32_t v = dword(m, j);
+            medians[j] = {static_cast<std::uint8_t>(v), static_cast<std::uint8_t>(v >> 8),
+                          static_cast<std::uint8_t>(v >> 16)};
+        }
         return medians;
     }
 #endif

@@ -182,8 +182,10 @@ int regionMediansDiffering(unsigned seed)
 TEST(DecoderKernels, RegionMediansMatchReference)
 {
     EXPECT_EQ(regionMediansDiffering(7u), 0);
-    // The reference itself: byte k's value at index count / 2 of the sorted.
-    const std::array<std::uint32_t, 6> pixels{0x000109u, 0x010203u, 0x0203c8u, 0x030403u, 0x040507u, 0x0506ffu};
+    // The reference itself: byte k's value at index count / 2 of the sorted
+    // (the bytes stored as value ^ 0x80).
+    std::array<std::uint32_t, 6> pixels{0x000109u, 0x010203u, 0x0203c8u, 0x030403u, 0x040507u, 0x0506ffu};
+    for (std::uint32_t& p : pixels) p ^= 0x808080u;
     EXPECT_EQ(channelMediansReference(pixels.data(), 6), (std::array<std::uint8_t, 3>{9, 4, 3}));
     EXPECT_EQ(channelMediansReference(pixels.data(), 5), (std::array<std::uint8_t, 3>{7, 3, 2}));
     EXPECT_EQ(channelMediansReference(pixels.data(), 1), (std::array<std::uint8_t, 3>{9, 1, 0}));
