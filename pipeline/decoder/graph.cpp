@@ -14,7 +14,9 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <cstddef>
 #include <cstring>
+#include <type_traits>
 
 namespace stria::pipeline {
 
@@ -67,6 +69,33 @@ std::uint64_t labelPair(const std::int32_t* p)
     }
 }
 
+// buildGraph's borderCount, normalX and normalY (bytes 8-15 of a GraphEdge)
+// as one little-endian word while the pairs add to it: normalY is less by
+// one where normalX < 0 (a borrow), which buildGraph gives back at the end.
+static_assert(offsetof(GraphEdge, normalX) == offsetof(GraphEdge, borderCount) + 4 &&
+              offsetof(GraphEdge, normalY) == offsetof(GraphEdge, borderCount) + 6);
+void addCountAndNormal(GraphEdge& edge, std::uint64_t delta)
+{
+    static_assert(std::endian::native == std::endian::little);  // a big-endian target would swap the halves
+    std::uint64_t word;
+    std::memcpy(&word, &edge.borderCount, sizeof word);
+    word += delta;
+    std::memcpy(&edge.borderCount, &word, sizeof word);
+}
+// Below this count an edge's normal sums cannot have reached the +-32767
+// where they saturate (|normal| <= count).
+constexpr std::int32_t kSaturatingCount = 32767;
+// The reference update (field by field, saturating) on the borrowed form.
+[[gnu::noinline]] void addSaturating(GraphEdge& edge, bool horizontal, bool positive)
+{
+    int x = edge.normalX, y = edge.normalY + (x < 0);
+    int& normal = horizontal ? x : y;
+    if (normal > -32767 && normal < 32767) normal += positive ? 1 : -1;
+    ++edge.borderCount;
+    edge.normalX = static_cast<std::int16_t>(x);
+    edge.normalY = static_cast<std::int16_t>(y - (x < 0));
+}
+
 }  // namespace
 
 std::size_t graphScratchEntries(std::size_t regions, std::size_t edges)
@@ -111,6 +140,7 @@ void buildGraph(DecoderWorkspace& ws)
     // registers (the edge count is in every look-up's dependency chain).
     GraphEdge* edges = ws.edges.get();
     std::int32_t edgeCount = 0;
+    // Edge records are cleared ahead of the count, 64 at a time.
     constexpr std::int32_t kClearBlock = 64;
     std::int32_t cleared = 0;
     auto clearAhead = [&] {
@@ -119,10 +149,12 @@ void buildGraph(DecoderWorkspace& ws)
         cleared = end;
     };
     clearAhead();
-    // A pair's edge record; past the capacity (a new edge with no room left,
-    // ws.truncated) a record nobody reads, so that the hot path has no test.
+    // A pair's edge record. Unchecked (std::false_type), for a row that
+    // cannot reach the capacity or the records not yet cleared (the
+    // caller's test, once per row): no test. Checked, past the capacity (a
+    // new edge with no room left, ws.truncated), a record nobody reads.
     GraphEdge overflow;
-    auto edgeOf = [&](std::uint64_t key) -> GraphEdge* {
+    auto edgeOf = [&](std::uint64_t key, auto checked) -> GraphEdge* {
         std::uint64_t slot = key * 0x9e3779b97f4a7c15u >> shift;
         // The key goes in ahead at the next free index (e <= capacity: the
         // scratch has room for one more), and an empty slot (-1) reads as
@@ -142,14 +174,16 @@ void buildGraph(DecoderWorkspace& ws)
         }
         table[slot] = static_cast<std::int32_t>(e);
         edgeCount += e >= next;  // e <= next: new where equal (compare and add with carry)
-        if (edgeCount >= cleared) [[unlikely]] {  // every 64 new edges, and once full
-            if (edgeCount > capacity) {  // new, and no room left: undone
-                table[slot] = -1;
-                edgeCount = capacity;
-                ws.truncated = true;
-                return &overflow;
+        if constexpr (checked) {
+            if (edgeCount >= cleared) [[unlikely]] {  // every 64 new edges, and once full
+                if (edgeCount > capacity) {  // new, and no room left: undone
+                    table[slot] = -1;
+                    edgeCount = capacity;
+                    ws.truncated = true;
+                    return &overflow;
+                }
+                clearAhead();
             }
-            clearAhead();
         }
         return edges + e;
     };
@@ -161,13 +195,26 @@ void buildGraph(DecoderWorkspace& ws)
     // swapped (the labels differ), and the word is not the key where p has
     // the smaller label: a rotation, a compare and a select, without a
     // branch (which side has the smaller label is unpredictable).
-    auto addPair = [&](std::uint64_t labels, bool horizontal, const PairGradient& gradient) {
+    //
+    // The count and the normal sums take one 64-bit add (addCountAndNormal):
+    // 1 + sign << 32 (horizontal) or 1 + sign << 48 (vertical). A -1 added
+    // to normalX borrows from normalY where normalX is 0 or less (the
+    // fields' word is normalX + 65536 normalY, both signed), which the loop
+    // after the pairs gives back. The normals saturate at +-32767 (and stay
+    // there), which only an edge of 32767 pairs or more can reach: from that
+    // count on, a branch predicted never taken leads to the field by field
+    // update (addSaturating).
+    auto addPair = [&](std::uint64_t labels, bool horizontal, const PairGradient& gradient, auto checked) {
         const std::uint64_t key = std::min(labels, std::rotl(labels, 32));
-        GraphEdge& edge = *edgeOf(key);
-        const int sign = key != labels ? 1 : -1;  // +1: the normal from a to b points to +x / +y
-        ++edge.borderCount;
-        std::int16_t& normal = horizontal ? edge.normalX : edge.normalY;
-        if (normal > -32767 && normal < 32767) normal = static_cast<std::int16_t>(normal + sign);
+        GraphEdge& edge = *edgeOf(key, checked);
+        const bool positive = key != labels;  // the normal from a to b points to +x / +y
+        if (edge.borderCount < kSaturatingCount) [[likely]] {
+            const int at = horizontal ? 32 : 48;
+            addCountAndNormal(edge, positive ? std::uint64_t{1} + (std::uint64_t{1} << at)
+                                             : std::uint64_t{1} - (std::uint64_t{1} << at));
+        } else {
+            addSaturating(edge, horizontal, positive);
+        }
         edge.primaryGradient += gradient.primary;
         edge.secondaryGradient += gradient.secondary;
     };
@@ -184,7 +231,7 @@ void buildGraph(DecoderWorkspace& ws)
     const int words = borderWords(w);
     const int lastH = w - 2;  // the last horizontal pair, in the last word
     const std::uint64_t lastHBit = std::uint64_t{1} << (lastH & 63);
-    for (int y = 0; y < h; ++y) {
+    auto addRow = [&](int y, auto checked) {
         const std::int32_t* row = label + static_cast<std::ptrdiff_t>(y) * w;
         const std::uint8_t* up = ws.frame.row(std::max(y - 1, 0));
         const std::uint8_t* pixels = ws.frame.row(y);
@@ -193,18 +240,18 @@ void buildGraph(DecoderWorkspace& ws)
         auto horizontalPairs = [&](std::size_t i0, std::uint64_t bits) {
             for (; bits; bits &= bits - 1) {
                 const std::size_t x = i0 + static_cast<unsigned>(std::countr_zero(bits));
-                addPair(labelPair(row + x), true, graph_kernels::horizontalPair(up, pixels, down, x, primary));
+                addPair(labelPair(row + x), true, graph_kernels::horizontalPair(up, pixels, down, x, primary), checked);
             }
         };
         if (lastH >= 0) {
             for (int k = 0; k + 1 < words; ++k) horizontalPairs(64 * k, masks[k]);
             horizontalPairs(64 * (words - 1), masks[words - 1] & ~lastHBit);
             if (masks[words - 1] & lastHBit)
-                addPair(labelPair(row + lastH), true, pairGradient(ws.frame, lastH, y, true, primary));
+                addPair(labelPair(row + lastH), true, pairGradient(ws.frame, lastH, y, true, primary), checked);
         }
         if (y + 1 < h) {
             auto verticalPair = [&](int x) {
-                addPair(labelPair(row[x], row[x + w]), false, pairGradient(ws.frame, x, y, false, primary));
+                addPair(labelPair(row[x], row[x + w]), false, pairGradient(ws.frame, x, y, false, primary), checked);
             };
             if (row[0] != row[w]) verticalPair(0);
             // Columns 1 to w - 3.
@@ -214,12 +261,24 @@ void buildGraph(DecoderWorkspace& ws)
                 for (std::uint64_t bits = mask; bits; bits &= bits - 1) {
                     const std::size_t x = static_cast<unsigned>(i0) + static_cast<unsigned>(std::countr_zero(bits));
                     addPair(labelPair(row[x], row[x + w]), false,
-                            graph_kernels::verticalPair(pixels, down, x, primary));
+                            graph_kernels::verticalPair(pixels, down, x, primary), checked);
                 }
                 first = ~std::uint64_t{0};
             }
             for (int x = std::max(w - 2, 1); x < w; ++x)
                 if (row[x] != row[x + w]) verticalPair(x);
+        }
+    };
+    // A row has fewer than 2 w pairs, so fewer new edges: where the capacity
+    // leaves room for them, the records for them are cleared and the row
+    // takes the unchecked look-ups; else (only near the capacity) the checked ones.
+    const std::int32_t rowEdges = 2 * w;
+    for (int y = 0; y < h; ++y) {
+        if (rowEdges <= capacity - edgeCount) {
+            while (cleared < edgeCount + rowEdges) clearAhead();
+            addRow(y, std::false_type{});
+        } else {
+            addRow(y, std::true_type{});
         }
     }
 
@@ -237,6 +296,7 @@ void buildGraph(DecoderWorkspace& ws)
         const auto a = static_cast<std::int32_t>(edgeKey[e] >> 32), b = static_cast<std::int32_t>(edgeKey[e] & 0xffffffffu);
         edges[e].a = a;
         edges[e].b = b;
+        edges[e].normalY = static_cast<std::int16_t>(edges[e].normalY + (edges[e].normalX < 0));  // addPair's borrow
         ++next[a];
         ++next[b];
     }
