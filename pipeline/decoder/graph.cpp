@@ -85,15 +85,46 @@ void addCountAndNormal(GraphEdge& edge, std::uint64_t delta)
 // Below this count an edge's normal sums cannot have reached the +-32767
 // where they saturate (|normal| <= count).
 constexpr std::int32_t kSaturatingCount = 32767;
-// The reference update (field by field, saturating) on the borrowed form.
-[[gnu::noinline]] void addSaturating(GraphEdge& edge, bool horizontal, bool positive)
+
+// The edge of label pair key (the smaller label high) in buildGraph's table,
+// or null for a pair past the capacity.
+struct EdgeTable {
+    const std::int32_t* table;
+    std::size_t size;
+    int shift;
+    const std::uint64_t* edgeKey;
+    std::uint64_t slot(std::uint64_t key) const { return key * 0x9e3779b97f4a7c15u >> shift; }
+    const std::int32_t* find(std::uint64_t key) const
+    {
+        for (std::uint64_t at = slot(key);; at = (at + 1) & (size - 1))
+            if (table[at] < 0 || edgeKey[table[at]] == key) return table[at] < 0 ? nullptr : &table[at];
+    }
+};
+
+// The normal sums of the edges of kSaturatingCount pairs or more, again:
+// buildGraph's adds wrap there instead of saturating, so these take the
+// reference's update (saturating, and staying there), pair by pair in
+// buildGraph's order. Only a border wound through a large part of the frame
+// has so many pairs: never in the benchmark's frames.
+[[gnu::noinline]] void recountSaturatingNormals(DecoderWorkspace& ws, const EdgeTable& lookup)
 {
-    int x = edge.normalX, y = edge.normalY + (x < 0);
-    int& normal = horizontal ? x : y;
-    if (normal > -32767 && normal < 32767) normal += positive ? 1 : -1;
-    ++edge.borderCount;
-    edge.normalX = static_cast<std::int16_t>(x);
-    edge.normalY = static_cast<std::int16_t>(y - (x < 0));
+    GraphEdge* edges = ws.edges.get();
+    for (int e = 0; e < ws.edgeCount; ++e)
+        if (edges[e].borderCount >= kSaturatingCount) edges[e].normalX = edges[e].normalY = 0;
+    auto add = [&](std::int32_t p, std::int32_t q, bool horizontal) {
+        if (p == q) return;
+        const std::int32_t* e = lookup.find(labelPair(std::max(p, q), std::min(p, q)));  // the smaller high
+        if (!e || edges[*e].borderCount < kSaturatingCount) return;
+        std::int16_t& normal = horizontal ? edges[*e].normalX : edges[*e].normalY;
+        if (normal > -32767 && normal < 32767) normal = static_cast<std::int16_t>(normal + (p < q ? 1 : -1));
+    };
+    const int w = ws.width, h = ws.height;
+    for (int y = 0; y < h; ++y) {
+        const std::int32_t* row = ws.labels.get() + static_cast<std::ptrdiff_t>(y) * w;
+        for (int x = 0; x + 1 < w; ++x) add(row[x], row[x + 1], true);
+        if (y + 1 < h)
+            for (int x = 0; x < w; ++x) add(row[x], row[x + w], false);
+    }
 }
 
 }  // namespace
@@ -134,6 +165,7 @@ void buildGraph(DecoderWorkspace& ws)
     std::int32_t* table = ws.pixelOrder;
     std::fill(table, table + tableSize, -1);
     auto* edgeKey = reinterpret_cast<std::uint64_t*>(ws.scratch.get());
+    const EdgeTable lookup{table, tableSize, shift, edgeKey};
     // Below maxEdges only for non-planar label graphs (never half full).
     const std::int32_t capacity = static_cast<std::int32_t>(std::min<std::size_t>(ws.maxEdges, tableSize / 2));
     // Locals, not workspace fields, across the kernel calls: kept in
@@ -155,7 +187,7 @@ void buildGraph(DecoderWorkspace& ws)
     // new edge with no room left, ws.truncated), a record nobody reads.
     GraphEdge overflow;
     auto edgeOf = [&](std::uint64_t key, auto checked) -> GraphEdge* {
-        std::uint64_t slot = key * 0x9e3779b97f4a7c15u >> shift;
+        std::uint64_t slot = lookup.slot(key);
         // The key goes in ahead at the next free index (e <= capacity: the
         // scratch has room for one more), and an empty slot (-1) reads as
         // that index (the unsigned minimum: stored indices are below it), so
@@ -201,20 +233,16 @@ void buildGraph(DecoderWorkspace& ws)
     // to normalX borrows from normalY where normalX is 0 or less (the
     // fields' word is normalX + 65536 normalY, both signed), which the loop
     // after the pairs gives back. The normals saturate at +-32767 (and stay
-    // there), which only an edge of 32767 pairs or more can reach: from that
-    // count on, a branch predicted never taken leads to the field by field
-    // update (addSaturating).
+    // there), which only an edge of 32767 pairs or more can reach: those
+    // edges' normals are counted again after the loop
+    // (recountSaturatingNormals), so that the adds here need no test.
     auto addPair = [&](std::uint64_t labels, bool horizontal, const PairGradient& gradient, auto checked) {
         const std::uint64_t key = std::min(labels, std::rotl(labels, 32));
         GraphEdge& edge = *edgeOf(key, checked);
         const bool positive = key != labels;  // the normal from a to b points to +x / +y
-        if (edge.borderCount < kSaturatingCount) [[likely]] {
-            const int at = horizontal ? 32 : 48;
-            addCountAndNormal(edge, positive ? std::uint64_t{1} + (std::uint64_t{1} << at)
-                                             : std::uint64_t{1} - (std::uint64_t{1} << at));
-        } else {
-            addSaturating(edge, horizontal, positive);
-        }
+        const int at = horizontal ? 32 : 48;
+        addCountAndNormal(edge, positive ? std::uint64_t{1} + (std::uint64_t{1} << at)
+                                         : std::uint64_t{1} - (std::uint64_t{1} << at));
         edge.primaryGradient += gradient.primary;
         edge.secondaryGradient += gradient.secondary;
     };
@@ -292,14 +320,17 @@ void buildGraph(DecoderWorkspace& ws)
     Region* regions = ws.regions.get();
     std::int32_t* next = ws.scratch.get() + 2 * static_cast<std::ptrdiff_t>(ws.maxEdges) + 2;
     std::fill(next, next + ws.regionCount, 0);
+    bool saturating = false;
     for (int e = 0; e < ws.edgeCount; ++e) {
         const auto a = static_cast<std::int32_t>(edgeKey[e] >> 32), b = static_cast<std::int32_t>(edgeKey[e] & 0xffffffffu);
         edges[e].a = a;
         edges[e].b = b;
         edges[e].normalY = static_cast<std::int16_t>(edges[e].normalY + (edges[e].normalX < 0));  // addPair's borrow
+        saturating |= edges[e].borderCount >= kSaturatingCount;
         ++next[a];
         ++next[b];
     }
+    if (saturating) [[unlikely]] recountSaturatingNormals(ws, lookup);
     std::int32_t offset = 0;
     for (int r = 0; r < ws.regionCount; ++r) {
         regions[r].adjacencyBegin = offset;
