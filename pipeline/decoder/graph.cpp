@@ -86,18 +86,30 @@ void addCountAndNormal(GraphEdge& edge, std::uint64_t delta)
 // where they saturate (|normal| <= count).
 constexpr std::int32_t kSaturatingCount = 32767;
 
-// The edge of label pair key (the smaller label high) in buildGraph's table,
-// or null for a pair past the capacity.
+// An edge's key: its labels a and b (bytes 0-7 of a GraphEdge) as one
+// little-endian word, b (the larger) high.
+static_assert(offsetof(GraphEdge, a) == 0 && offsetof(GraphEdge, b) == 4);
+std::uint64_t keyOf(const GraphEdge& edge)
+{
+    std::uint64_t key;
+    std::memcpy(&key, &edge.a, sizeof key);
+    return key;
+}
+void setKey(GraphEdge& edge, std::uint64_t key) { std::memcpy(&edge.a, &key, sizeof key); }
+
+// buildGraph's hash table of edge indices by key; find gives the edge of a
+// key, or -1 for a pair past the capacity.
 struct EdgeTable {
     const std::int32_t* table;
     std::size_t size;
     int shift;
-    const std::uint64_t* edgeKey;
+    const GraphEdge* edges;
     std::uint64_t slot(std::uint64_t key) const { return key * 0x9e3779b97f4a7c15u >> shift; }
-    const std::int32_t* find(std::uint64_t key) const
+    std::int32_t find(std::uint64_t key) const
     {
-        for (std::uint64_t at = slot(key);; at = (at + 1) & (size - 1))
-            if (table[at] < 0 || edgeKey[table[at]] == key) return table[at] < 0 ? nullptr : &table[at];
+        std::uint64_t at = slot(key);
+        while (table[at] >= 0 && keyOf(edges[table[at]]) != key) at = (at + 1) & (size - 1);
+        return table[at];
     }
 };
 
@@ -113,9 +125,9 @@ struct EdgeTable {
         if (edges[e].borderCount >= kSaturatingCount) edges[e].normalX = edges[e].normalY = 0;
     auto add = [&](std::int32_t p, std::int32_t q, bool horizontal) {
         if (p == q) return;
-        const std::int32_t* e = lookup.find(labelPair(std::max(p, q), std::min(p, q)));  // the smaller high
-        if (!e || edges[*e].borderCount < kSaturatingCount) return;
-        std::int16_t& normal = horizontal ? edges[*e].normalX : edges[*e].normalY;
+        const std::int32_t e = lookup.find(labelPair(std::min(p, q), std::max(p, q)));  // the larger high
+        if (e < 0 || edges[e].borderCount < kSaturatingCount) return;
+        std::int16_t& normal = horizontal ? edges[e].normalX : edges[e].normalY;
         if (normal > -32767 && normal < 32767) normal = static_cast<std::int16_t>(normal + (p < q ? 1 : -1));
     };
     const int w = ws.width, h = ws.height;
@@ -131,9 +143,9 @@ struct EdgeTable {
 
 std::size_t graphScratchEntries(std::size_t regions, std::size_t edges)
 {
-    // The label pair of each edge (2 entries), and one more for the key the
-    // look-up stores ahead at the next free index, then a counter per
-    // region; the traversal reuses the share.
+    // 2 entries per edge and 2 more (the traversal's share; the graph's
+    // label pairs are in its edge records), then the graph's counter per
+    // region.
     return regions + 2 * edges + 2;
 }
 
@@ -151,7 +163,7 @@ void buildGraph(DecoderWorkspace& ws)
 
     // Edges by label pair: a hash table of edge indices (open addressing,
     // linear probing; in the order buffer, free from the regions stage to the
-    // depth stage) and each edge's pair (in the scratch). At most half full
+    // depth stage) and each edge's pair (its a and b, keyOf). At most half full
     // (graphTableEntries), a quarter where the buffer has room (it has for
     // the default capacities): a pair finds its edge, or the empty slot of a
     // new one, nearly always at the first probe, and whether the edge is new
@@ -164,13 +176,12 @@ void buildGraph(DecoderWorkspace& ws)
     const int shift = 64 - std::countr_zero(tableSize);
     std::int32_t* table = ws.pixelOrder;
     std::fill(table, table + tableSize, -1);
-    auto* edgeKey = reinterpret_cast<std::uint64_t*>(ws.scratch.get());
-    const EdgeTable lookup{table, tableSize, shift, edgeKey};
     // Below maxEdges only for non-planar label graphs (never half full).
     const std::int32_t capacity = static_cast<std::int32_t>(std::min<std::size_t>(ws.maxEdges, tableSize / 2));
     // Locals, not workspace fields, across the kernel calls: kept in
     // registers (the edge count is in every look-up's dependency chain).
     GraphEdge* edges = ws.edges.get();
+    const EdgeTable lookup{table, tableSize, shift, edges};
     std::int32_t edgeCount = 0;
     // Edge records are cleared ahead of the count, 64 at a time.
     constexpr std::int32_t kClearBlock = 64;
@@ -183,48 +194,49 @@ void buildGraph(DecoderWorkspace& ws)
     clearAhead();
     // A pair's edge record. Unchecked (std::false_type), for a row that
     // cannot reach the capacity or the records not yet cleared (the
-    // caller's test, once per row): no test. Checked, past the capacity (a
-    // new edge with no room left, ws.truncated), a record nobody reads.
+    // caller's test, once per row): no test. Checked, once full, the edge
+    // of a key already there or, for a new one (ws.truncated), a record
+    // nobody reads.
     GraphEdge overflow;
     auto edgeOf = [&](std::uint64_t key, auto checked) -> GraphEdge* {
+        if constexpr (checked) {
+            if (edgeCount == capacity) [[unlikely]] {
+                const std::int32_t e = lookup.find(key);
+                ws.truncated |= e < 0;
+                return e < 0 ? &overflow : edges + e;
+            }
+        }
         std::uint64_t slot = lookup.slot(key);
-        // The key goes in ahead at the next free index (e <= capacity: the
-        // scratch has room for one more), and an empty slot (-1) reads as
-        // that index (the unsigned minimum: stored indices are below it), so
-        // the probe stops at the edge or at the empty slot by one compare,
-        // and whether the edge is new (a fifth of the look-ups, in no pattern
-        // a branch predictor learns) is selected, not branched on (GCC 12
-        // makes the minimum a cmov with the signed count, a branch with an
-        // unsigned one: check the mispredictions when changing it).
+        // The key goes in ahead into the next free record (cleared, below
+        // the capacity), and an empty slot (-1) reads as that index (the
+        // unsigned minimum: stored indices are below it), so the probe stops
+        // at the edge or at the empty slot by one compare, and whether the
+        // edge is new (a fifth of the look-ups, in no pattern a branch
+        // predictor learns) is selected, not branched on (GCC 12 makes the
+        // minimum a cmov with the signed count, a branch with an unsigned
+        // one: check the mispredictions when changing it). The record's
+        // other fields are only written once it is the pair's edge.
         const auto next = static_cast<std::uint32_t>(edgeCount);
-        edgeKey[next] = key;
+        setKey(edges[next], key);
         auto probe = [&] { return std::min(static_cast<std::uint32_t>(table[slot]), next); };
         std::uint32_t e = probe();
-        while (edgeKey[e] != key) {  // a collision: about 1 look-up in 12
+        while (keyOf(edges[e]) != key) {  // a collision: about 1 look-up in 12
             slot = (slot + 1) & (tableSize - 1);
             e = probe();
         }
         table[slot] = static_cast<std::int32_t>(e);
         edgeCount += e >= next;  // e <= next: new where equal (compare and add with carry)
         if constexpr (checked) {
-            if (edgeCount >= cleared) [[unlikely]] {  // every 64 new edges, and once full
-                if (edgeCount > capacity) {  // new, and no room left: undone
-                    table[slot] = -1;
-                    edgeCount = capacity;
-                    ws.truncated = true;
-                    return &overflow;
-                }
-                clearAhead();
-            }
+            if (edgeCount >= cleared) [[unlikely]] clearAhead();  // every 64 new edges (none once full)
         }
         return edges + e;
     };
 
     // Adds border pair p-q (q right of p or below it) to its edge, given
     // its labels as one word, q's high and p's low (a horizontal pair's two
-    // labels as they lie in memory). The edge's key, the smaller label high
-    // and the larger low, is the smaller of that word and its halves
-    // swapped (the labels differ), and the word is not the key where p has
+    // labels as they lie in memory). The edge's key, the larger label high
+    // and the smaller low, is the larger of that word and its halves
+    // swapped (the labels differ), and the word is the key where p has
     // the smaller label: a rotation, a compare and a select, without a
     // branch (which side has the smaller label is unpredictable).
     //
@@ -237,9 +249,9 @@ void buildGraph(DecoderWorkspace& ws)
     // edges' normals are counted again after the loop
     // (recountSaturatingNormals), so that the adds here need no test.
     auto addPair = [&](std::uint64_t labels, bool horizontal, const PairGradient& gradient, auto checked) {
-        const std::uint64_t key = std::min(labels, std::rotl(labels, 32));
+        const std::uint64_t key = std::max(labels, std::rotl(labels, 32));
         GraphEdge& edge = *edgeOf(key, checked);
-        const bool positive = key != labels;  // the normal from a to b points to +x / +y
+        const bool positive = key == labels;  // the normal from a to b points to +x / +y
         const int at = horizontal ? 32 : 48;
         addCountAndNormal(edge, positive ? std::uint64_t{1} + (std::uint64_t{1} << at)
                                          : std::uint64_t{1} - (std::uint64_t{1} << at));
@@ -312,19 +324,17 @@ void buildGraph(DecoderWorkspace& ws)
 
     ws.edgeCount = edgeCount;
 
-    // The pairs, then the incidence lists (CSR), each region's degree and
-    // then its next list position counted in a compact array after the
-    // pairs in the scratch (graphScratchEntries), not in the 64-byte region
-    // records: those are written once, in order, instead of being
-    // incremented at random 4 times per edge.
+    // The incidence lists (CSR), each region's degree and then its next
+    // list position counted in a compact array in the scratch
+    // (graphScratchEntries), not in the 64-byte region records: those are
+    // written once, in order, instead of being incremented at random 4
+    // times per edge.
     Region* regions = ws.regions.get();
     std::int32_t* next = ws.scratch.get() + 2 * static_cast<std::ptrdiff_t>(ws.maxEdges) + 2;
     std::fill(next, next + ws.regionCount, 0);
     bool saturating = false;
     for (int e = 0; e < ws.edgeCount; ++e) {
-        const auto a = static_cast<std::int32_t>(edgeKey[e] >> 32), b = static_cast<std::int32_t>(edgeKey[e] & 0xffffffffu);
-        edges[e].a = a;
-        edges[e].b = b;
+        const std::int32_t a = edges[e].a, b = edges[e].b;
         edges[e].normalY = static_cast<std::int16_t>(edges[e].normalY + (edges[e].normalX < 0));  // addPair's borrow
         saturating |= edges[e].borderCount >= kSaturatingCount;
         ++next[a];
