@@ -14,7 +14,9 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <cstddef>
 #include <cstring>
+#include <type_traits>
 
 namespace stria::pipeline {
 
@@ -67,13 +69,83 @@ std::uint64_t labelPair(const std::int32_t* p)
     }
 }
 
+// buildGraph's borderCount, normalX and normalY (bytes 8-15 of a GraphEdge)
+// as one little-endian word while the pairs add to it: normalY is less by
+// one where normalX < 0 (a borrow), which buildGraph gives back at the end.
+static_assert(offsetof(GraphEdge, normalX) == offsetof(GraphEdge, borderCount) + 4 &&
+              offsetof(GraphEdge, normalY) == offsetof(GraphEdge, borderCount) + 6);
+void addCountAndNormal(GraphEdge& edge, std::uint64_t delta)
+{
+    static_assert(std::endian::native == std::endian::little);  // a big-endian target would swap the halves
+    std::uint64_t word;
+    std::memcpy(&word, &edge.borderCount, sizeof word);
+    word += delta;
+    std::memcpy(&edge.borderCount, &word, sizeof word);
+}
+// Below this count an edge's normal sums cannot have reached the +-32767
+// where they saturate (|normal| <= count).
+constexpr std::int32_t kSaturatingCount = 32767;
+
+// An edge's key: its labels a and b (bytes 0-7 of a GraphEdge) as one
+// little-endian word, b (the larger) high.
+static_assert(offsetof(GraphEdge, a) == 0 && offsetof(GraphEdge, b) == 4);
+std::uint64_t keyOf(const GraphEdge& edge)
+{
+    std::uint64_t key;
+    std::memcpy(&key, &edge.a, sizeof key);
+    return key;
+}
+void setKey(GraphEdge& edge, std::uint64_t key) { std::memcpy(&edge.a, &key, sizeof key); }
+
+// buildGraph's hash table of edge indices by key; find gives the edge of a
+// key, or -1 for a pair past the capacity.
+struct EdgeTable {
+    const std::int32_t* table;
+    std::size_t size;
+    int shift;
+    const GraphEdge* edges;
+    std::uint64_t slot(std::uint64_t key) const { return key * 0x9e3779b97f4a7c15u >> shift; }
+    std::int32_t find(std::uint64_t key) const
+    {
+        std::uint64_t at = slot(key);
+        while (table[at] >= 0 && keyOf(edges[table[at]]) != key) at = (at + 1) & (size - 1);
+        return table[at];
+    }
+};
+
+// The normal sums of the edges of kSaturatingCount pairs or more, again:
+// buildGraph's adds wrap there instead of saturating, so these take the
+// reference's update (saturating, and staying there), pair by pair in
+// buildGraph's order. Only a border wound through a large part of the frame
+// has so many pairs: never in the benchmark's frames.
+[[gnu::noinline]] void recountSaturatingNormals(DecoderWorkspace& ws, const EdgeTable& lookup)
+{
+    GraphEdge* edges = ws.edges.get();
+    for (int e = 0; e < ws.edgeCount; ++e)
+        if (edges[e].borderCount >= kSaturatingCount) edges[e].normalX = edges[e].normalY = 0;
+    auto add = [&](std::int32_t p, std::int32_t q, bool horizontal) {
+        if (p == q) return;
+        const std::int32_t e = lookup.find(labelPair(std::min(p, q), std::max(p, q)));  // the larger high
+        if (e < 0 || edges[e].borderCount < kSaturatingCount) return;
+        std::int16_t& normal = horizontal ? edges[e].normalX : edges[e].normalY;
+        if (normal > -32767 && normal < 32767) normal = static_cast<std::int16_t>(normal + (p < q ? 1 : -1));
+    };
+    const int w = ws.width, h = ws.height;
+    for (int y = 0; y < h; ++y) {
+        const std::int32_t* row = ws.labels.get() + static_cast<std::ptrdiff_t>(y) * w;
+        for (int x = 0; x + 1 < w; ++x) add(row[x], row[x + 1], true);
+        if (y + 1 < h)
+            for (int x = 0; x < w; ++x) add(row[x], row[x + w], false);
+    }
+}
+
 }  // namespace
 
 std::size_t graphScratchEntries(std::size_t regions, std::size_t edges)
 {
-    // The label pair of each edge (2 entries), and one more for the key the
-    // look-up stores ahead at the next free index, then a counter per
-    // region; the traversal reuses the share.
+    // 2 entries per edge and 2 more (the traversal's share; the graph's
+    // label pairs are in its edge records), then the graph's counter per
+    // region.
     return regions + 2 * edges + 2;
 }
 
@@ -91,7 +163,7 @@ void buildGraph(DecoderWorkspace& ws)
 
     // Edges by label pair: a hash table of edge indices (open addressing,
     // linear probing; in the order buffer, free from the regions stage to the
-    // depth stage) and each edge's pair (in the scratch). At most half full
+    // depth stage) and each edge's pair (its a and b, keyOf). At most half full
     // (graphTableEntries), a quarter where the buffer has room (it has for
     // the default capacities): a pair finds its edge, or the empty slot of a
     // new one, nearly always at the first probe, and whether the edge is new
@@ -104,70 +176,88 @@ void buildGraph(DecoderWorkspace& ws)
     const int shift = 64 - std::countr_zero(tableSize);
     std::int32_t* table = ws.pixelOrder;
     std::fill(table, table + tableSize, -1);
-    auto* edgeKey = reinterpret_cast<std::uint64_t*>(ws.scratch.get());
     // Below maxEdges only for non-planar label graphs (never half full).
     const std::int32_t capacity = static_cast<std::int32_t>(std::min<std::size_t>(ws.maxEdges, tableSize / 2));
     // Locals, not workspace fields, across the kernel calls: kept in
     // registers (the edge count is in every look-up's dependency chain).
     GraphEdge* edges = ws.edges.get();
+    const EdgeTable lookup{table, tableSize, shift, edges};
     std::int32_t edgeCount = 0;
+    // Edge records are cleared ahead of the count, 64 at a time.
     constexpr std::int32_t kClearBlock = 64;
     std::int32_t cleared = 0;
     auto clearAhead = [&] {
         const std::int32_t end = std::min(cleared + kClearBlock, capacity);
-        std::fill(edges + cleared, edges + end, GraphEdge{});
+        // GraphEdge{} is all zero bytes: a memset's wide stores, where
+        // std::fill stored field by field.
+        static_assert(std::is_trivially_copyable_v<GraphEdge>);
+        std::memset(static_cast<void*>(edges + cleared), 0, sizeof(GraphEdge) * static_cast<std::size_t>(end - cleared));
         cleared = end;
     };
     clearAhead();
-    // A pair's edge record; past the capacity (a new edge with no room left,
-    // ws.truncated) a record nobody reads, so that the hot path has no test.
+    // A pair's edge record. Unchecked (std::false_type), for a row that
+    // cannot reach the capacity or the records not yet cleared (the
+    // caller's test, once per row): no test. Checked, once full, the edge
+    // of a key already there or, for a new one (ws.truncated), a record
+    // nobody reads.
     GraphEdge overflow;
-    auto edgeOf = [&](std::uint64_t key) -> GraphEdge* {
-        std::uint64_t slot = key * 0x9e3779b97f4a7c15u >> shift;
-        // The key goes in ahead at the next free index (e <= capacity: the
-        // scratch has room for one more), and an empty slot (-1) reads as
-        // that index (the unsigned minimum: stored indices are below it), so
-        // the probe stops at the edge or at the empty slot by one compare,
-        // and whether the edge is new (a fifth of the look-ups, in no pattern
-        // a branch predictor learns) is selected, not branched on (GCC 12
-        // makes the minimum a cmov with the signed count, a branch with an
-        // unsigned one: check the mispredictions when changing it).
+    auto edgeOf = [&](std::uint64_t key, auto checked) -> GraphEdge* {
+        if constexpr (checked) {
+            if (edgeCount == capacity) [[unlikely]] {
+                const std::int32_t e = lookup.find(key);
+                ws.truncated |= e < 0;
+                return e < 0 ? &overflow : edges + e;
+            }
+        }
+        std::uint64_t slot = lookup.slot(key);
+        // The key goes in ahead into the next free record (cleared, below
+        // the capacity), and an empty slot (-1) reads as that index (the
+        // unsigned minimum: stored indices are below it), so the probe stops
+        // at the edge or at the empty slot by one compare, and whether the
+        // edge is new (a fifth of the look-ups, in no pattern a branch
+        // predictor learns) is selected, not branched on (GCC 12 makes the
+        // minimum a cmov with the signed count, a branch with an unsigned
+        // one: check the mispredictions when changing it). The record's
+        // other fields are only written once it is the pair's edge.
         const auto next = static_cast<std::uint32_t>(edgeCount);
-        edgeKey[next] = key;
+        setKey(edges[next], key);
         auto probe = [&] { return std::min(static_cast<std::uint32_t>(table[slot]), next); };
         std::uint32_t e = probe();
-        while (edgeKey[e] != key) {  // a collision: about 1 look-up in 12
+        while (keyOf(edges[e]) != key) {  // a collision: about 1 look-up in 12
             slot = (slot + 1) & (tableSize - 1);
             e = probe();
         }
         table[slot] = static_cast<std::int32_t>(e);
         edgeCount += e >= next;  // e <= next: new where equal (compare and add with carry)
-        if (edgeCount >= cleared) [[unlikely]] {  // every 64 new edges, and once full
-            if (edgeCount > capacity) {  // new, and no room left: undone
-                table[slot] = -1;
-                edgeCount = capacity;
-                ws.truncated = true;
-                return &overflow;
-            }
-            clearAhead();
+        if constexpr (checked) {
+            if (edgeCount >= cleared) [[unlikely]] clearAhead();  // every 64 new edges (none once full)
         }
         return edges + e;
     };
 
     // Adds border pair p-q (q right of p or below it) to its edge, given
     // its labels as one word, q's high and p's low (a horizontal pair's two
-    // labels as they lie in memory). The edge's key, the smaller label high
-    // and the larger low, is the smaller of that word and its halves
-    // swapped (the labels differ), and the word is not the key where p has
+    // labels as they lie in memory). The edge's key, the larger label high
+    // and the smaller low, is the larger of that word and its halves
+    // swapped (the labels differ), and the word is the key where p has
     // the smaller label: a rotation, a compare and a select, without a
     // branch (which side has the smaller label is unpredictable).
-    auto addPair = [&](std::uint64_t labels, bool horizontal, const PairGradient& gradient) {
-        const std::uint64_t key = std::min(labels, std::rotl(labels, 32));
-        GraphEdge& edge = *edgeOf(key);
-        const int sign = key != labels ? 1 : -1;  // +1: the normal from a to b points to +x / +y
-        ++edge.borderCount;
-        std::int16_t& normal = horizontal ? edge.normalX : edge.normalY;
-        if (normal > -32767 && normal < 32767) normal = static_cast<std::int16_t>(normal + sign);
+    //
+    // The count and the normal sums take one 64-bit add (addCountAndNormal):
+    // 1 + sign << 32 (horizontal) or 1 + sign << 48 (vertical). A -1 added
+    // to normalX borrows from normalY where normalX is 0 or less (the
+    // fields' word is normalX + 65536 normalY, both signed), which the loop
+    // after the pairs gives back. The normals saturate at +-32767 (and stay
+    // there), which only an edge of 32767 pairs or more can reach: those
+    // edges' normals are counted again after the loop
+    // (recountSaturatingNormals), so that the adds here need no test.
+    auto addPair = [&](std::uint64_t labels, bool horizontal, const PairGradient& gradient, auto checked) {
+        const std::uint64_t key = std::max(labels, std::rotl(labels, 32));
+        GraphEdge& edge = *edgeOf(key, checked);
+        const bool positive = key == labels;  // the normal from a to b points to +x / +y
+        const int at = horizontal ? 32 : 48;
+        addCountAndNormal(edge, positive ? std::uint64_t{1} + (std::uint64_t{1} << at)
+                                         : std::uint64_t{1} - (std::uint64_t{1} << at));
         edge.primaryGradient += gradient.primary;
         edge.secondaryGradient += gradient.secondary;
     };
@@ -184,7 +274,7 @@ void buildGraph(DecoderWorkspace& ws)
     const int words = borderWords(w);
     const int lastH = w - 2;  // the last horizontal pair, in the last word
     const std::uint64_t lastHBit = std::uint64_t{1} << (lastH & 63);
-    for (int y = 0; y < h; ++y) {
+    auto addRow = [&](int y, auto checked) {
         const std::int32_t* row = label + static_cast<std::ptrdiff_t>(y) * w;
         const std::uint8_t* up = ws.frame.row(std::max(y - 1, 0));
         const std::uint8_t* pixels = ws.frame.row(y);
@@ -193,18 +283,18 @@ void buildGraph(DecoderWorkspace& ws)
         auto horizontalPairs = [&](std::size_t i0, std::uint64_t bits) {
             for (; bits; bits &= bits - 1) {
                 const std::size_t x = i0 + static_cast<unsigned>(std::countr_zero(bits));
-                addPair(labelPair(row + x), true, graph_kernels::horizontalPair(up, pixels, down, x, primary));
+                addPair(labelPair(row + x), true, graph_kernels::horizontalPair(up, pixels, down, x, primary), checked);
             }
         };
         if (lastH >= 0) {
             for (int k = 0; k + 1 < words; ++k) horizontalPairs(64 * k, masks[k]);
             horizontalPairs(64 * (words - 1), masks[words - 1] & ~lastHBit);
             if (masks[words - 1] & lastHBit)
-                addPair(labelPair(row + lastH), true, pairGradient(ws.frame, lastH, y, true, primary));
+                addPair(labelPair(row + lastH), true, pairGradient(ws.frame, lastH, y, true, primary), checked);
         }
         if (y + 1 < h) {
             auto verticalPair = [&](int x) {
-                addPair(labelPair(row[x], row[x + w]), false, pairGradient(ws.frame, x, y, false, primary));
+                addPair(labelPair(row[x], row[x + w]), false, pairGradient(ws.frame, x, y, false, primary), checked);
             };
             if (row[0] != row[w]) verticalPair(0);
             // Columns 1 to w - 3.
@@ -214,32 +304,46 @@ void buildGraph(DecoderWorkspace& ws)
                 for (std::uint64_t bits = mask; bits; bits &= bits - 1) {
                     const std::size_t x = static_cast<unsigned>(i0) + static_cast<unsigned>(std::countr_zero(bits));
                     addPair(labelPair(row[x], row[x + w]), false,
-                            graph_kernels::verticalPair(pixels, down, x, primary));
+                            graph_kernels::verticalPair(pixels, down, x, primary), checked);
                 }
                 first = ~std::uint64_t{0};
             }
             for (int x = std::max(w - 2, 1); x < w; ++x)
                 if (row[x] != row[x + w]) verticalPair(x);
         }
+    };
+    // A row has fewer than 2 w pairs, so fewer new edges: where the capacity
+    // leaves room for them, the records for them are cleared and the row
+    // takes the unchecked look-ups; else (only near the capacity) the checked ones.
+    const std::int32_t rowEdges = 2 * w;
+    for (int y = 0; y < h; ++y) {
+        if (rowEdges <= capacity - edgeCount) {
+            while (cleared < edgeCount + rowEdges) clearAhead();
+            addRow(y, std::false_type{});
+        } else {
+            addRow(y, std::true_type{});
+        }
     }
 
     ws.edgeCount = edgeCount;
 
-    // The pairs, then the incidence lists (CSR), each region's degree and
-    // then its next list position counted in a compact array after the
-    // pairs in the scratch (graphScratchEntries), not in the 64-byte region
-    // records: those are written once, in order, instead of being
-    // incremented at random 4 times per edge.
+    // The incidence lists (CSR), each region's degree and then its next
+    // list position counted in a compact array in the scratch
+    // (graphScratchEntries), not in the 64-byte region records: those are
+    // written once, in order, instead of being incremented at random 4
+    // times per edge.
     Region* regions = ws.regions.get();
     std::int32_t* next = ws.scratch.get() + 2 * static_cast<std::ptrdiff_t>(ws.maxEdges) + 2;
     std::fill(next, next + ws.regionCount, 0);
+    bool saturating = false;
     for (int e = 0; e < ws.edgeCount; ++e) {
-        const auto a = static_cast<std::int32_t>(edgeKey[e] >> 32), b = static_cast<std::int32_t>(edgeKey[e] & 0xffffffffu);
-        edges[e].a = a;
-        edges[e].b = b;
+        const std::int32_t a = edges[e].a, b = edges[e].b;
+        edges[e].normalY = static_cast<std::int16_t>(edges[e].normalY + (edges[e].normalX < 0));  // addPair's borrow
+        saturating |= edges[e].borderCount >= kSaturatingCount;
         ++next[a];
         ++next[b];
     }
+    if (saturating) [[unlikely]] recountSaturatingNormals(ws, lookup);
     std::int32_t offset = 0;
     for (int r = 0; r < ws.regionCount; ++r) {
         regions[r].adjacencyBegin = offset;

@@ -508,7 +508,8 @@ std::vector<GraphEdge> referenceGraph(const DecoderWorkspace& ws)
         }
         GraphEdge& edge = edges[it->second];
         ++edge.borderCount;
-        (horizontal ? edge.normalX : edge.normalY) += static_cast<std::int16_t>(sign);
+        std::int16_t& normal = horizontal ? edge.normalX : edge.normalY;
+        if (normal > -32767 && normal < 32767) normal = static_cast<std::int16_t>(normal + sign);  // saturating
         const PairGradient gradient = pairGradient(ws.frame, x, y, horizontal, ws.primary);
         edge.primaryGradient += gradient.primary;
         edge.secondaryGradient += gradient.secondary;
@@ -642,6 +643,31 @@ TEST(DecoderKernels, RegionsAndGraphMatchReferencesOnTinyImages)
         c.differingLabels();
         EXPECT_EQ(c.differingRegions(), 0) << width << "x" << height;
         EXPECT_EQ(c.differingGraphEdges(), 0) << width << "x" << height;
+    }
+}
+
+TEST(DecoderKernels, GraphNormalsSaturateLikeTheReference)
+{
+    // Three labels in diagonal stripes, (x + y) mod 3 and (x - y) mod 3:
+    // edges of about 80000 border pairs whose normal sums run to +32767 or
+    // -32767 in x and in y (all four sign combinations), where they stay.
+    for (const int slope : {1, -1}) {
+        FloodCase c(randomFrame(400, 300, 5u), 400 * 300 / 16);
+        const int w = c.ws.width, h = c.ws.height;
+        for (int y = 0; y < h; ++y)
+            for (int x = 0; x < w; ++x) c.ws.labels[y * w + x] = ((x + slope * y) % 3 + 3) % 3;
+        for (int y = 0; y < h; ++y) {
+            const std::int32_t* row = c.ws.labels.get() + y * w;
+            forEachBorder(row, row + 1, w - 1, c.ws.rowBorders + y * borderWords(w), [](int) {});
+        }
+        c.ws.regionCount = 3;
+        EXPECT_EQ(c.differingGraphEdges(), 0) << slope;
+        ASSERT_EQ(c.ws.edgeCount, 3);
+        for (int e = 0; e < 3; ++e) {
+            EXPECT_GT(c.ws.edges[e].borderCount, 70000);
+            EXPECT_EQ(std::abs(c.ws.edges[e].normalX), 32767);
+            EXPECT_EQ(std::abs(c.ws.edges[e].normalY), 32767);
+        }
     }
 }
 
