@@ -22,6 +22,7 @@
 #include <algorithm>
 #include <array>
 #include <bit>
+#include <cstddef>
 #include <cstdint>
 #include <cstring>
 #include <limits>
@@ -39,22 +40,23 @@ constexpr float kCentroidThreshold = 0.25f;
 // than 1 away from every stripe and from itself minus any stripe.
 constexpr std::int32_t kUndecoded = -(1 << 30);
 
+// Four float lanes (GCC vector extensions: SSE2 on x86-64, NEON on ARM).
+using Lanes = float __attribute__((vector_size(16)));
+
 // Per symbol code and orientation (0: the stripe index falls from left to
 // right, 1: it rises), the numerators of an edge's channel weights: the
 // orientation (-1 or +1) times the symbol's expected sign, the same float
 // products step 2 took per edge (its int-to-float conversions and products
-// were 4 of the 9 instructions per channel).
+// were 4 of the 9 instructions per channel). In lanes 0-2 of a vector (lane
+// 3 is 0), as step 2 divides them.
 constexpr auto kSignedSigns = [] {
-    std::array<std::array<std::array<float, 3>, 2>, kSymbolCount> numerators{};
+    std::array<std::array<std::array<float, 4>, 2>, kSymbolCount> numerators{};
     for (int s = 0; s < kSymbolCount; ++s)
         for (int o = 0; o < 2; ++o)
             for (int c = 0; c < 3; ++c)
                 numerators[s][o][c] = (o == 1 ? 1.0f : -1.0f) * static_cast<float>(kSymbolSigns[s][c]);
     return numerators;
 }();
-
-// Four float lanes (GCC vector extensions: SSE2 on x86-64, NEON on ARM).
-using Lanes = float __attribute__((vector_size(16)));
 // Two double lanes (SSE2 / NEON), and two ints.
 using Doubles = double __attribute__((vector_size(16)));
 using Pair = std::int32_t __attribute__((vector_size(8)));
@@ -164,7 +166,7 @@ void computePoints(DecoderWorkspace& ws)
     // instructions) left its latency exposed.
     constexpr int kBatch = 256;
     std::array<std::int32_t, kBatch> at, edges, firsts;
-    std::array<cv::Vec3f, kBatch> weights;
+    std::array<cv::Vec3f, kBatch + 1> weights;  // + 1: step 2 stores 4 floats per edge
     std::array<std::array<float, kWindowSamples + 1>, kBatch> samples;
     // The centroids' arrays have room for 3 more: a batch in 4 lanes.
     std::array<double, kBatch + 3> columns;
@@ -215,17 +217,33 @@ void computePoints(DecoderWorkspace& ws)
                 count += static_cast<int>(((static_cast<unsigned>(leftStripe - rightStripe) + 1) & ~2u) == 0);
             }
             if (count > kBatch - 64 || x0 + 64 >= w - 1) {
-                // Step 2: weights per channel: expected sign / range, walking left to right.
+                // Step 2: weights per channel: expected sign / range, walking
+                // left to right. The 3 channels in lanes (one division, and
+                // a select where std::max's branch was: 3 per edge): per
+                // lane numerator[c] / std::max(0.5f * (left.range[c] +
+                // right.range[c]), 1.0f), the same floats. Lane 3 (range's
+                // next float, centroidX, over 0) lands in the next edge's
+                // weights, which that edge overwrites, or in the spare one.
+                static_assert(offsetof(Region, range) + sizeof(Lanes) <= sizeof(Region));
                 for (int j = 0; j < count; ++j) {
                     const int x = at[j];
                     const Region& left = regions[label[x]];
                     const Region& right = regions[label[x + 1]];
                     const int leftStripe = stripes[label[x]], rightStripe = stripes[label[x + 1]];
                     const int edge = std::min(leftStripe, rightStripe);
-                    const std::array<float, 3>& numerator =
-                        kSignedSigns[ws.pattern.edgeSymbol(edge)][rightStripe > leftStripe ? 1 : 0];
-                    for (int c = 0; c < 3; ++c)
-                        weights[j][c] = numerator[c] / std::max(0.5f * (left.range[c] + right.range[c]), 1.0f);
+                    Lanes numerator, leftRange, rightRange;
+                    std::memcpy(&numerator, &kSignedSigns[ws.pattern.edgeSymbol(edge)][rightStripe > leftStripe ? 1 : 0],
+                                sizeof numerator);
+                    std::memcpy(&leftRange, left.range.data(), sizeof leftRange);
+                    std::memcpy(&rightRange, right.range.data(), sizeof rightRange);
+                    const Lanes one = Lanes{} + 1.0f, range = 0.5f * (leftRange + rightRange);
+#if defined(__SSE2__)
+                    // maxps(a, b) is a > b ? a : b: std::max(range, 1.0f) in one instruction (GCC: 4).
+                    const Lanes weight = numerator / Lanes(_mm_max_ps(one, range));
+#else
+                    const Lanes weight = numerator / (range < one ? one : range);  // std::max(range, 1.0f)
+#endif
+                    std::memcpy(reinterpret_cast<char*>(weights.data()) + sizeof(cv::Vec3f) * j, &weight, sizeof weight);
                     edges[j] = edge;
                     firsts[j] = x - 2 * kSearchRadius;
                 }
