@@ -214,21 +214,29 @@ void computePoints(DecoderWorkspace& ws)
                 for (int k = 0; k < 3; ++k) __builtin_prefetch(reinterpret_cast<const void*>(nextPixels + p + 64 * k));
             }
         }
-        int count = 0;
-        for (int x0 = 0; x0 < w - 1; x0 += 64) {
+        // 64-bit count and columns: as int, GCC sign-extended them per change.
+        std::ptrdiff_t count = 0;
+        // The stripe left of the next label change: the masks mark every
+        // change, so the pixels from the previous change (or the row's
+        // start) to the next share a label. Carried from change to change,
+        // it halves step 1's look-ups.
+        std::int32_t leftStripe = stripes[label[0]];
+        for (std::ptrdiff_t x0 = 0; x0 < w - 1; x0 += 64) {
             // Step 1: label changes between regions decoded as consecutive
             // stripes k, k + 1, from the regions stage's border masks, gathered without a
             // branch per change: whether two neighbours share a label, and
             // whether their stripes are consecutive, is noise to a branch
             // predictor (85 000 and 22 000 mispredictions per 780x580 frame).
             for (std::uint64_t bits = borders[x0 / 64]; bits; bits &= bits - 1) {
-                const int x = x0 + std::countr_zero(bits);
-                const int leftStripe = stripes[label[x]], rightStripe = stripes[label[x + 1]];
-                at[count] = x;
+                const std::ptrdiff_t x = x0 + std::countr_zero(bits);
+                const std::int32_t rightStripe = stripes[label[x + 1]];
+                at[count] = static_cast<std::int32_t>(x);
                 // leftStripe - rightStripe = -1 or +1 (both decoded, as kUndecoded is far from every stripe).
-                count += static_cast<int>(((static_cast<unsigned>(leftStripe - rightStripe) + 1) & ~2u) == 0);
+                count += ((static_cast<unsigned>(leftStripe - rightStripe) + 1) & ~2u) == 0;
+                leftStripe = rightStripe;
             }
             if (count > 0 && (count > kBatch - 64 || x0 + 64 >= w - 1)) {
+                const int batch = static_cast<int>(count);
                 // Step 2: weights per channel: expected sign / range, walking
                 // left to right. The 3 channels in lanes (one division, and
                 // a select where std::max's branch was: 3 per edge): per
@@ -237,7 +245,7 @@ void computePoints(DecoderWorkspace& ws)
                 // next float, centroidX, over 0) lands in the next edge's
                 // weights, which that edge overwrites, or in the spare one.
                 static_assert(offsetof(Region, range) + sizeof(Lanes) <= sizeof(Region));
-                for (int j = 0; j < count; ++j) {
+                for (int j = 0; j < batch; ++j) {
                     const int x = at[j];
                     const Region& left = regions[label[x]];
                     const Region& right = regions[label[x + 1]];
@@ -267,7 +275,7 @@ void computePoints(DecoderWorkspace& ws)
                 // of a peak at x + kSearchRadius: it is computed then, so
                 // most edges take 8 samples (two kernel steps of 4) rather
                 // than 9 (three).
-                projectedGradientWindows(row, w, firsts.data(), weights.data(), count, ws.rgbOffset, m, samples.data());
+                projectedGradientWindows(row, w, firsts.data(), weights.data(), batch, ws.rgbOffset, m, samples.data());
                 // Step 4: the sub-pixel column of every edge, 4 edges at a
                 // time, one per lane (the scalar form, per edge: below), all
                 // edges: those not located (almost none) are dropped by
@@ -300,14 +308,14 @@ void computePoints(DecoderWorkspace& ws)
                 // does not see.
                 static_assert(kSearchRadius == 2, "5 peak candidates, 5 centroid samples");
                 constexpr int kCentre = 2 * kSearchRadius;  // x's sample
-                for (int i = count; i < count + 3; ++i) {  // lanes past the last repeat it (count > 0)
-                    at[i] = at[count - 1];
-                    edges[i] = edges[count - 1];
-                    weights[i] = weights[count - 1];
-                    samples[i] = samples[count - 1];
+                for (int i = batch; i < batch + 3; ++i) {  // lanes past the last repeat it (batch > 0)
+                    at[i] = at[batch - 1];
+                    edges[i] = edges[batch - 1];
+                    weights[i] = weights[batch - 1];
+                    samples[i] = samples[batch - 1];
                 }
                 const Ints lowest = Ints{} + kSearchRadius, highest = lowest + static_cast<std::int32_t>(peakLimit);
-                for (int j0 = 0; j0 < count; j0 += 4) {
+                for (int j0 = 0; j0 < batch; j0 += 4) {
                     std::array<float*, 4> s;
                     for (int i = 0; i < 4; ++i) s[i] = samples[j0 + i].data();
                     // Samples x - 2 .. x + 1, then x + 2.
@@ -372,7 +380,7 @@ void computePoints(DecoderWorkspace& ws)
                 ScanPoint* const points = ws.points;
                 int pointCount = ws.pointCount;
                 const int maxPoints = ws.maxPoints;
-                for (int j = 0; j < count; j += 2) {
+                for (int j = 0; j < batch; j += 2) {
                     Doubles xn, yn, u;
                     std::memcpy(&u, &columns[j], sizeof u);
                     rays.at(u, xn, yn);
@@ -397,7 +405,7 @@ void computePoints(DecoderWorkspace& ws)
                     std::memcpy(&located, &locatedMasks[j], sizeof located);
                     const Longs kept = std::bit_cast<Longs>(valid) & located;
                     const Doubles px = xn * t, py = yn * t;
-                    for (int i = 0; i < 2 && j + i < count; ++i) {
+                    for (int i = 0; i < 2 && j + i < batch; ++i) {
                         if (!kept[i]) continue;
                         const int edge = edges[j + i];
                         const ScanPoint scanPoint{
