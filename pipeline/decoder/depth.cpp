@@ -185,8 +185,9 @@ STRIA_X86_CLONES void computePoints(DecoderWorkspace& ws)
     // instructions) left its latency exposed.
     constexpr int kBatch = 256;
     // Arrays from step 4 on have room for 3 more: a batch in 4 lanes.
-    std::array<std::int32_t, kBatch + 3> at, edges;
-    std::array<std::int32_t, kBatch> firsts;
+    // Per edge at column x (the label change x, x + 1): its window's first
+    // sample, x - 2 kSearchRadius (step 3's input as step 1 stores it).
+    std::array<std::int32_t, kBatch + 3> firsts, edges;
     std::array<cv::Vec3f, kBatch + 3> weights;  // step 2 stores 4 floats per edge: 1 past the last
     std::array<std::array<float, kWindowSamples + 1>, kBatch + 3> samples;
     std::array<double, kBatch + 3> columns;
@@ -234,7 +235,7 @@ STRIA_X86_CLONES void computePoints(DecoderWorkspace& ws)
             for (std::uint64_t bits = borders[x0 / 64]; bits; bits &= bits - 1) {
                 const std::ptrdiff_t x = x0 + std::countr_zero(bits);
                 const std::int32_t rightStripe = stripes[label[x + 1]];
-                at[count] = static_cast<std::int32_t>(x);
+                firsts[count] = static_cast<std::int32_t>(x - 2 * kSearchRadius);
                 // leftStripe - rightStripe = -1 or +1 (both decoded, as kUndecoded is far from every stripe).
                 count += ((static_cast<unsigned>(leftStripe - rightStripe) + 1) & ~2u) == 0;
                 leftStripe = rightStripe;
@@ -250,7 +251,7 @@ STRIA_X86_CLONES void computePoints(DecoderWorkspace& ws)
                 // weights, which that edge overwrites, or in the spare one.
                 static_assert(offsetof(Region, range) + sizeof(Lanes) <= sizeof(Region));
                 for (int j = 0; j < batch; ++j) {
-                    const int x = at[j];
+                    const int x = firsts[j] + 2 * kSearchRadius;
                     const Region& left = regions[label[x]];
                     const Region& right = regions[label[x + 1]];
                     const int leftStripe = stripes[label[x]], rightStripe = stripes[label[x + 1]];
@@ -269,7 +270,6 @@ STRIA_X86_CLONES void computePoints(DecoderWorkspace& ws)
 #endif
                     std::memcpy(reinterpret_cast<char*>(weights.data()) + sizeof(cv::Vec3f) * j, &weight, sizeof weight);
                     edges[j] = edge;
-                    firsts[j] = x - 2 * kSearchRadius;
                 }
                 // Step 3: projected gradient at half-pixel positions i + 0.5,
                 // i in [x - 2 * kSearchRadius, x + 2 * kSearchRadius]: every
@@ -313,7 +313,7 @@ STRIA_X86_CLONES void computePoints(DecoderWorkspace& ws)
                 static_assert(kSearchRadius == 2, "5 peak candidates, 5 centroid samples");
                 constexpr int kCentre = 2 * kSearchRadius;  // x's sample
                 for (int i = batch; i < batch + 3; ++i) {  // lanes past the last repeat it (batch > 0)
-                    at[i] = at[batch - 1];
+                    firsts[i] = firsts[batch - 1];
                     edges[i] = edges[batch - 1];
                     weights[i] = weights[batch - 1];
                     samples[i] = samples[batch - 1];
@@ -336,7 +336,8 @@ STRIA_X86_CLONES void computePoints(DecoderWorkspace& ws)
                     }
                     const Lanes peakValue = std::bit_cast<Lanes>(top);
                     Ints x;
-                    std::memcpy(&x, &at[j0], sizeof x);
+                    std::memcpy(&x, &firsts[j0], sizeof x);
+                    x += 2 * kSearchRadius;
                     const Ints peak = x + offset;
                     const Ints located = (peakValue > 0) & (peak >= lowest) & (peak <= highest);
                     // The first sample of each centroid window (0 if not located).
