@@ -9,6 +9,9 @@
 #elif defined(__SSE2__)
 #include <emmintrin.h>
 #endif
+#if defined(__x86_64__)
+#include <immintrin.h>
+#endif
 
 namespace stria::pipeline {
 
@@ -126,6 +129,119 @@ void windows(const std::uint8_t* row, int width, const std::int32_t* firsts, con
 #endif
 }
 
+#if defined(__x86_64__)
+// The AVX2 version (x86-64-v3 and -v4 CPUs): a window's 8 samples per
+// channel in one 8-lane vector, straight from the bytes by byte shuffles
+// (vpshufb: SSE2 has none, hence its unpacking and 7 float shuffles per 4
+// samples): 34 instructions per window, with the loop, against the SSE2
+// version's 94 (780x580 under callgrind). The same floats: the differences as int32 (exact),
+// then the SSE2 version's products and sums in its order.
+//
+// Shuffle control: per sample k < 8, byte b (the channel's) of pixel
+// first + k + shift (shift 0: here, 1: next) zero-extended to int32 lane k
+// (index -1 clears a byte); samples 0-3 in the low 128-bit lane, from the
+// 16 bytes at pixel first, samples 4-7 in the high one, from the 16 bytes
+// at byte 11 (pixel 4's byte b is their byte 1 + b). Bytes read: 0-26, the
+// window's 9 pixels.
+constexpr std::array<std::int8_t, 32> windowControl(int b, int shift)
+{
+    std::array<std::int8_t, 32> c{};
+    for (int k = 0; k < 4; ++k) {
+        for (int z = 1; z < 4; ++z) c[4 * k + z] = c[16 + 4 * k + z] = -1;
+        c[4 * k] = static_cast<std::int8_t>(3 * (k + shift) + b);
+        c[16 + 4 * k] = static_cast<std::int8_t>(1 + 3 * (k + shift) + b);
+    }
+    return c;
+}
+
+template <bool bgr, bool identity>
+[[gnu::target("arch=x86-64-v3")]] void windowsAvx2(const std::uint8_t* row, int width, const std::int32_t* firsts,
+                                                   const cv::Vec3f* weights, int count,
+                                                   const std::array<int, 3>& rgbOffset, const cv::Matx33f& m,
+                                                   std::array<float, kWindowSamples + 1>* out)
+{
+    constexpr int byte[3] = {bgr ? 2 : 0, 1, bgr ? 0 : 2};  // of R, G, B in a pixel
+    static constexpr std::array<std::array<std::int8_t, 32>, 6> kControls = {
+        windowControl(byte[0], 0), windowControl(byte[0], 1), windowControl(byte[1], 0),
+        windowControl(byte[1], 1), windowControl(byte[2], 0), windowControl(byte[2], 1)};
+    __m256i controls[6];
+    for (int i = 0; i < 6; ++i) controls[i] = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(kControls[i].data()));
+    __m256 mm[3][3];
+    for (int k = 0; k < 3; ++k)
+        for (int c = 0; c < 3; ++c) mm[k][c] = _mm256_set1_ps(m(k, c));
+    // first < 0 or first + kWindowSamples > width - 1 as one unsigned compare:
+    // first >= the end of the first columns of uncut windows (0 if none).
+    const unsigned uncutEnd = static_cast<unsigned>(std::max(width - kWindowSamples, 0));
+    for (int j = 0; j < count; ++j) {
+        const int first = firsts[j];
+        if (static_cast<unsigned>(first) >= uncutEnd) {
+            clippedWindow(row, width, first, rgbOffset, m, weights[j], out[j].data());
+            continue;
+        }
+        const std::uint8_t* p = row + 3 * first;
+        const __m256i bytes =
+            _mm256_inserti128_si256(_mm256_castsi128_si256(_mm_loadu_si128(reinterpret_cast<const __m128i*>(p))),
+                                    _mm_loadu_si128(reinterpret_cast<const __m128i*>(p + 11)), 1);
+        __m256 raw[3];
+        for (int c = 0; c < 3; ++c)
+            raw[c] = _mm256_cvtepi32_ps(_mm256_sub_epi32(_mm256_shuffle_epi8(bytes, controls[2 * c + 1]),
+                                                         _mm256_shuffle_epi8(bytes, controls[2 * c])));
+        __m256 corrected[3] = {raw[0], raw[1], raw[2]};
+        for (int k = 0; k < 3 && !identity; ++k)
+            corrected[k] = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(mm[k][0], raw[0]), _mm256_mul_ps(mm[k][1], raw[1])),
+                                         _mm256_mul_ps(mm[k][2], raw[2]));
+        const cv::Vec3f& weight = weights[j];
+        const __m256 sum = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(_mm256_broadcast_ss(&weight[0]), corrected[0]),
+                                                       _mm256_mul_ps(_mm256_broadcast_ss(&weight[1]), corrected[1])),
+                                         _mm256_mul_ps(_mm256_broadcast_ss(&weight[2]), corrected[2]));
+        _mm256_storeu_ps(out[j].data(), sum);
+    }
+}
+
+// The version per CPU, picked at run time by GCC's function multiversioning
+// (an ifunc; target_clones cannot give its clones different bodies).
+template <bool avx2>
+void windowsFor(bool bgr, bool identity, const std::uint8_t* row, int width, const std::int32_t* firsts,
+                const cv::Vec3f* weights, int count, const std::array<int, 3>& rgbOffset, const cv::Matx33f& m,
+                std::array<float, kWindowSamples + 1>* out)
+{
+    auto run = [&](auto kernel) { kernel(row, width, firsts, weights, count, rgbOffset, m, out); };
+    if constexpr (avx2) {
+        if (bgr)
+            identity ? run(windowsAvx2<true, true>) : run(windowsAvx2<true, false>);
+        else
+            identity ? run(windowsAvx2<false, true>) : run(windowsAvx2<false, false>);
+    } else {
+        if (bgr)
+            identity ? run(windows<true, true>) : run(windows<true, false>);
+        else
+            identity ? run(windows<false, true>) : run(windows<false, false>);
+    }
+}
+
+[[gnu::target("default")]] void windowsVersion(bool bgr, bool identity, const std::uint8_t* row, int width,
+                                               const std::int32_t* firsts, const cv::Vec3f* weights, int count,
+                                               const std::array<int, 3>& rgbOffset, const cv::Matx33f& m,
+                                               std::array<float, kWindowSamples + 1>* out)
+{
+    windowsFor<false>(bgr, identity, row, width, firsts, weights, count, rgbOffset, m, out);
+}
+[[gnu::target("arch=x86-64-v3")]] void windowsVersion(bool bgr, bool identity, const std::uint8_t* row, int width,
+                                                      const std::int32_t* firsts, const cv::Vec3f* weights, int count,
+                                                      const std::array<int, 3>& rgbOffset, const cv::Matx33f& m,
+                                                      std::array<float, kWindowSamples + 1>* out)
+{
+    windowsFor<true>(bgr, identity, row, width, firsts, weights, count, rgbOffset, m, out);
+}
+[[gnu::target("arch=x86-64-v4")]] void windowsVersion(bool bgr, bool identity, const std::uint8_t* row, int width,
+                                                      const std::int32_t* firsts, const cv::Vec3f* weights, int count,
+                                                      const std::array<int, 3>& rgbOffset, const cv::Matx33f& m,
+                                                      std::array<float, kWindowSamples + 1>* out)
+{
+    windowsFor<true>(bgr, identity, row, width, firsts, weights, count, rgbOffset, m, out);
+}
+#endif
+
 }  // namespace
 
 void projectedGradientWindows(const std::uint8_t* row, int width, const std::int32_t* firsts,
@@ -134,11 +250,15 @@ void projectedGradientWindows(const std::uint8_t* row, int width, const std::int
 {
     const bool bgr = rgbOffset == std::array<int, 3>{2, 1, 0}, identity = m == cv::Matx33f::eye();
     if (bgr || rgbOffset == std::array<int, 3>{0, 1, 2}) {
+#if defined(__x86_64__)
+        windowsVersion(bgr, identity, row, width, firsts, weights, count, rgbOffset, m, out);
+#else
         auto run = [&](auto kernel) { kernel(row, width, firsts, weights, count, rgbOffset, m, out); };
         if (bgr)
             identity ? run(windows<true, true>) : run(windows<true, false>);
         else
             identity ? run(windows<false, true>) : run(windows<false, false>);
+#endif
     } else
         for (int j = 0; j < count; ++j) clippedWindow(row, width, firsts[j], rgbOffset, m, weights[j], out[j].data());
 }
