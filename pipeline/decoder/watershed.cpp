@@ -312,16 +312,19 @@ void computeWatershed(DecoderWorkspace& ws)
             word.lastStart = last;
             if (word.starts != 0) last = x0 + 63 - std::countl_zero(word.starts);
         }
+        // The new minima take the next provisional labels (in raster order),
+        // the other runs the label of the run above their first pixel: two
+        // loops on the two kinds of first pixels (no branch between them).
         for (int k = 0; k < words; ++k)
-            for (std::uint64_t bits = runs[k].starts; bits != 0; bits &= bits - 1) {
+            for (std::uint64_t bits = runs[k].fresh; bits != 0; bits &= bits - 1) {
                 const int x = 64 * k + std::countr_zero(bits);
-                // Without a branch: -1 for a new minimum (which reads a label
-                // above in vain and keeps its parent entry).
-                const std::int32_t fresh = -static_cast<std::int32_t>(runs[k].fresh >> (x & 63) & 1);
-                const std::int32_t above = ~labelAbove[runStart(runsAbove, x)];
                 parent[provisional] = ~(y * w + x);
-                row[x] = ~((provisional & fresh) | (above & ~fresh));
-                provisional -= fresh;
+                row[x] = ~provisional++;
+            }
+        for (int k = 0; k < words; ++k)
+            for (std::uint64_t bits = runs[k].starts & ~runs[k].fresh; bits != 0; bits &= bits - 1) {
+                const int x = 64 * k + std::countr_zero(bits);
+                row[x] = labelAbove[runStart(runsAbove, x)];
             }
         for (int k = 0; k < words; ++k)
             for (std::uint64_t bits = runs[k].joins; bits != 0; bits &= bits - 1) {
