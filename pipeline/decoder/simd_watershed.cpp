@@ -36,8 +36,10 @@ void descentRowReference(const std::uint8_t* up, const std::uint8_t* row, const 
     for (int x = 0; x < width; ++x) descentPixel(up, row, down, width, x, code);
 }
 
-void descentRow(const std::uint8_t* up, const std::uint8_t* row, const std::uint8_t* down, int width,
-                std::uint8_t* code)
+// (x86-64: clones for AVX2 and AVX-512, whose vectorised loop takes 32 or 64
+// pixels per step.)
+STRIA_X86_CLONES void descentRow(const std::uint8_t* up, const std::uint8_t* row, const std::uint8_t* down, int width,
+                                 std::uint8_t* code)
 {
     if (width < 3) {
         descentRowReference(up, row, down, width, code);
