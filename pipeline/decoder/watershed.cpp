@@ -146,7 +146,9 @@ std::size_t watershedScratchEntries(int width, int height)
            2 * runWords(width) * sizeof(RunWord) / sizeof(std::int32_t);
 }
 
-void computeWatershed(DecoderWorkspace& ws)
+// x86-64: clones for AVX2 and AVX-512 too (STRIA_X86_CLONES): the loops GCC
+// vectorises take 32 bytes per step, the bit loops BMI's tzcnt/blsr/shlx.
+STRIA_X86_CLONES void computeWatershed(DecoderWorkspace& ws)
 {
     const int w = ws.width, h = ws.height, n = w * h;
     const std::uint8_t* g = ws.gradient.get();
