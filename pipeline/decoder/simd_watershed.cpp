@@ -192,12 +192,19 @@ template <typename V>
 // (own's last lane), the broadcasts off the chain: one vpternlogd in the
 // AVX-512 version (watershed 1.37 -> 1.21 ms at 780x580), where a select then
 // a broadcast took 3 dependent instructions. On ARM a vbsl then a dup, 4
-// instructions fewer per block than the and-or.
+// instructions fewer per block than the and-or. The AVX2 version (blend)
+// takes the select then the broadcast too: one vblendvps and one vpermd,
+// where the and-or took 7 instructions (no vpternlogd).
 // (stored: the block as stored, for the unresolved mask of the last sweep.)
-template <int last, typename V>
+template <int last, bool blend, typename V>
 [[gnu::always_inline]] inline V storeWithCarry(std::int32_t* out, V m, V v, V carry, V& stored)
 {
     constexpr V lastLane = everyLane<V>(last);
+    if constexpr (blend) {
+        stored = select(m, carry, v);
+        store(out, stored);
+        return __builtin_shuffle(stored, lastLane);
+    }
 #if defined(__x86_64__)
     const V own = v & ~m;
     stored = own | (carry & m);
@@ -255,8 +262,8 @@ template <int shift, typename V>
 // block resolves its runs by a prefix scan in log2(lanes) shuffle steps (lane
 // i takes lane i - 1, then i - 2, ..., while its mask is set), and only the
 // lanes that copy from beyond the block (their mask still set) take the
-// previous block's label (storeWithCarry).
-template <typename V>
+// previous block's label (storeWithCarry, blend as there).
+template <typename V, bool blend = false>
 [[gnu::always_inline]] inline void upLeftLanes(const std::uint8_t* code, const std::int32_t* above, std::int32_t* row,
                                                int width)
 {
@@ -271,7 +278,7 @@ template <typename V>
         scanStep<2>(v, m);
         if constexpr (n == 8) scanStep<4>(v, m);
         V stored;
-        carry = storeWithCarry<n - 1>(row + x, m, v, carry, stored);
+        carry = storeWithCarry<n - 1, blend>(row + x, m, v, carry, stored);
     }
     std::int32_t previous = carry[0];
     for (int x = blocks; x < width; ++x) {
@@ -288,11 +295,11 @@ template <typename V>
 // the watershed, whose path leads down), as each block is final when stored:
 // sign-bit masks, where a pass of 16-label compares over the row took 4 times
 // more instructions.
-template <typename V>
+template <typename V, bool blend = false>
 [[gnu::always_inline]] inline void sweepLanes(const std::uint8_t* code, const std::int32_t* above, std::int32_t* row,
                                               int width, std::uint64_t* unresolved)
 {
-    upLeftLanes<V>(code, above, row, width);
+    upLeftLanes<V, blend>(code, above, row, width);
     constexpr int n = kLanes<V>;
     const int blocks = width & ~(n - 1);
     for (int k = 0; k < (width + 63) / 64; ++k) unresolved[k] = 0;
@@ -310,7 +317,7 @@ template <typename V>
         scanStep<-2>(v, m);
         if constexpr (n == 8) scanStep<-4>(v, m);
         V stored;
-        carry = storeWithCarry<0>(row + x, m, v, carry, stored);
+        carry = storeWithCarry<0, blend>(row + x, m, v, carry, stored);
         // Blocks of 4 or 8 at multiples of their size: never across a word.
         unresolved[x >> 6] |= negativeBits(stored) << (x & 63);
     }
@@ -329,7 +336,7 @@ using Lanes8 = std::int32_t __attribute__((vector_size(32)));
 [[gnu::target("arch=x86-64-v3")]] void upLeftVersion(const std::uint8_t* c, const std::int32_t* a, std::int32_t* r,
                                                       int w)
 {
-    upLeftLanes<Lanes8>(c, a, r, w);
+    upLeftLanes<Lanes8, true>(c, a, r, w);
 }
 [[gnu::target("arch=x86-64-v4")]] void upLeftVersion(const std::uint8_t* c, const std::int32_t* a, std::int32_t* r,
                                                       int w)
@@ -344,7 +351,7 @@ using Lanes8 = std::int32_t __attribute__((vector_size(32)));
 [[gnu::target("arch=x86-64-v3")]] void sweepVersion(const std::uint8_t* c, const std::int32_t* a, std::int32_t* r,
                                                      int w, std::uint64_t* u)
 {
-    sweepLanes<Lanes8>(c, a, r, w, u);
+    sweepLanes<Lanes8, true>(c, a, r, w, u);
 }
 [[gnu::target("arch=x86-64-v4")]] void sweepVersion(const std::uint8_t* c, const std::int32_t* a, std::int32_t* r,
                                                      int w, std::uint64_t* u)

@@ -124,7 +124,7 @@ RunWord* runWordsIn(std::int32_t* scratch, int width, int height)
 }
 
 // The first pixel of the run holding flat pixel x of the word at column x0
-// (the last start at or before x), without a branch (runs end anywhere).
+// (the last start at or before x; rarely one in the words before).
 // through: bits 0 to x - x0 set, as bits ^ (bits - 1) when x is the lowest
 // set bit of the bits a loop walks (cheaper than from x).
 std::int32_t runStart(const RunWord& word, int x0, std::uint64_t through)
