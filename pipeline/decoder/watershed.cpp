@@ -164,7 +164,8 @@ STRIA_X86_CLONES void computeWatershed(DecoderWorkspace& ws)
     auto* code = reinterpret_cast<std::uint8_t*>(ws.scratch.get());
     std::uint8_t* wall = code + n;
     std::fill(wall, wall + w, 255);
-    const std::array<std::int32_t, 4> step{-w, -1, 1, w};
+    // (Pixel indices in the walks as std::ptrdiff_t: no sign extension per step.)
+    const std::array<std::ptrdiff_t, 4> step{-w, -1, 1, w};
 
     // 1. Arrows down the steepest 4-neighbour step.
     for (int y = 0; y < h; ++y)
@@ -364,12 +365,12 @@ STRIA_X86_CLONES void computeWatershed(DecoderWorkspace& ws)
         sweepRow(rowCode, y > 0 ? row - w : row, row, w, unresolved);  // no arrow up in row 0
         for (int x0 = 0; x0 < w; x0 += 64) {
             std::uint64_t bits = unresolved[x0 / 64];
-            auto labelPath = [&](int p, int q) {
+            auto labelPath = [&](std::ptrdiff_t p, std::ptrdiff_t q) {
                 // Without a branch (it mispredicted): parent[0] read in vain
                 // if the end's label is final.
                 const std::int32_t end = label[q], provisional = end >> 31;  // -1 if ~(a provisional label)
                 const std::int32_t basin = end ^ ((end ^ parent[~end & provisional]) & provisional);
-                for (int r = p; r != q; r += step[code[r] & 3]) label[r] = basin;
+                for (std::ptrdiff_t r = p; r != q; r += step[code[r] & 3]) label[r] = basin;
             };
             // Two walks at a time: each step waits on the previous one's
             // loads (often L1 misses: a step down is a row away), so two
@@ -380,17 +381,17 @@ STRIA_X86_CLONES void computeWatershed(DecoderWorkspace& ws)
             // unique), so labelling one path over the other writes the same
             // basin.
             while (bits != 0) {
-                const int p1 = y * w + x0 + std::countr_zero(bits);
+                const std::ptrdiff_t p1 = y * w + x0 + std::countr_zero(bits);
                 bits &= bits - 1;
-                int q1 = p1;
+                std::ptrdiff_t q1 = p1;
                 if (bits == 0) {
                     while (label[q1] == kUnresolved) q1 += step[code[q1] & 3];
                     labelPath(p1, q1);
                     break;
                 }
-                const int p2 = y * w + x0 + std::countr_zero(bits);
+                const std::ptrdiff_t p2 = y * w + x0 + std::countr_zero(bits);
                 bits &= bits - 1;
-                int q2 = p2;
+                std::ptrdiff_t q2 = p2;
                 while (label[q1] == kUnresolved && label[q2] == kUnresolved) {
                     q1 += step[code[q1] & 3];
                     q2 += step[code[q2] & 3];
