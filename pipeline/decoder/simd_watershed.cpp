@@ -36,8 +36,10 @@ void descentRowReference(const std::uint8_t* up, const std::uint8_t* row, const 
     for (int x = 0; x < width; ++x) descentPixel(up, row, down, width, x, code);
 }
 
-void descentRow(const std::uint8_t* up, const std::uint8_t* row, const std::uint8_t* down, int width,
-                std::uint8_t* code)
+// (x86-64: clones for AVX2 and AVX-512, whose vectorised loop takes 32 or 64
+// pixels per step.)
+STRIA_X86_CLONES void descentRow(const std::uint8_t* up, const std::uint8_t* row, const std::uint8_t* down, int width,
+                                 std::uint8_t* code)
 {
     if (width < 3) {
         descentRowReference(up, row, down, width, code);
@@ -111,9 +113,16 @@ template <typename V>
 [[gnu::always_inline]] inline void store(std::int32_t* p, V v) { std::memcpy(p, &v, sizeof v); }
 
 // a in the lanes of mask m (-1), else b. (The vector ternary would compare m
-// with 0 first.)
+// with 0 first; in 8 lanes, on the sign bit, it is one vblendvps, where GCC
+// made 3 instructions of the and-or.)
 template <typename V>
-[[gnu::always_inline]] inline V select(V m, V a, V b) { return (a & m) | (b & ~m); }
+[[gnu::always_inline]] inline V select(V m, V a, V b)
+{
+    if constexpr (sizeof(V) == 32)
+        return m < 0 ? a : b;
+    else
+        return (a & m) | (b & ~m);
+}
 
 // Shuffle indices: lane i takes lane i - shift (i + shift when shift < 0),
 // itself where that is outside the block; or `lane` in every lane.
@@ -144,10 +153,18 @@ consteval V everyLane(int lane)
 // The codes of a block of 4 in each lane (byte k = pixel k, the next 4 in
 // the next 4 lanes): lane k's byte k % 4 is pixel k's code, so one
 // and-compare per direction gives the lane masks, without widening the bytes.
+// (8 lanes: the 8 bytes broadcast, then lanes 0-3 take dword 0 and lanes
+// 4-7 dword 1: vpbroadcastq and vpermd, where the loop below took 6.)
 template <typename V>
 [[gnu::always_inline]] inline V codesOf(const std::uint8_t* code)
 {
     static_assert(std::endian::native == std::endian::little, "byte k of the word is pixel k");
+    if constexpr (kLanes<V> == 8) {
+        std::int64_t eight;
+        std::memcpy(&eight, code, sizeof eight);
+        using Quads = std::int64_t __attribute__((vector_size(32)));
+        return __builtin_shuffle(reinterpret_cast<V>(Quads{} + eight), V{0, 0, 0, 0, 1, 1, 1, 1});
+    }
     V v;
     for (int i = 0; i < kLanes<V>; i += 4) {
         std::int32_t c;
@@ -175,12 +192,19 @@ template <typename V>
 // (own's last lane), the broadcasts off the chain: one vpternlogd in the
 // AVX-512 version (watershed 1.37 -> 1.21 ms at 780x580), where a select then
 // a broadcast took 3 dependent instructions. On ARM a vbsl then a dup, 4
-// instructions fewer per block than the and-or.
+// instructions fewer per block than the and-or. The AVX2 version (blend)
+// takes the select then the broadcast too: one vblendvps and one vpermd,
+// where the and-or took 7 instructions (no vpternlogd).
 // (stored: the block as stored, for the unresolved mask of the last sweep.)
-template <int last, typename V>
+template <int last, bool blend, typename V>
 [[gnu::always_inline]] inline V storeWithCarry(std::int32_t* out, V m, V v, V carry, V& stored)
 {
     constexpr V lastLane = everyLane<V>(last);
+    if constexpr (blend) {
+        stored = select(m, carry, v);
+        store(out, stored);
+        return __builtin_shuffle(stored, lastLane);
+    }
 #if defined(__x86_64__)
     const V own = v & ~m;
     stored = own | (carry & m);
@@ -238,8 +262,8 @@ template <int shift, typename V>
 // block resolves its runs by a prefix scan in log2(lanes) shuffle steps (lane
 // i takes lane i - 1, then i - 2, ..., while its mask is set), and only the
 // lanes that copy from beyond the block (their mask still set) take the
-// previous block's label (storeWithCarry).
-template <typename V>
+// previous block's label (storeWithCarry, blend as there).
+template <typename V, bool blend = false>
 [[gnu::always_inline]] inline void upLeftLanes(const std::uint8_t* code, const std::int32_t* above, std::int32_t* row,
                                                int width)
 {
@@ -254,7 +278,7 @@ template <typename V>
         scanStep<2>(v, m);
         if constexpr (n == 8) scanStep<4>(v, m);
         V stored;
-        carry = storeWithCarry<n - 1>(row + x, m, v, carry, stored);
+        carry = storeWithCarry<n - 1, blend>(row + x, m, v, carry, stored);
     }
     std::int32_t previous = carry[0];
     for (int x = blocks; x < width; ++x) {
@@ -271,11 +295,11 @@ template <typename V>
 // the watershed, whose path leads down), as each block is final when stored:
 // sign-bit masks, where a pass of 16-label compares over the row took 4 times
 // more instructions.
-template <typename V>
+template <typename V, bool blend = false>
 [[gnu::always_inline]] inline void sweepLanes(const std::uint8_t* code, const std::int32_t* above, std::int32_t* row,
                                               int width, std::uint64_t* unresolved)
 {
-    upLeftLanes<V>(code, above, row, width);
+    upLeftLanes<V, blend>(code, above, row, width);
     constexpr int n = kLanes<V>;
     const int blocks = width & ~(n - 1);
     for (int k = 0; k < (width + 63) / 64; ++k) unresolved[k] = 0;
@@ -293,7 +317,7 @@ template <typename V>
         scanStep<-2>(v, m);
         if constexpr (n == 8) scanStep<-4>(v, m);
         V stored;
-        carry = storeWithCarry<0>(row + x, m, v, carry, stored);
+        carry = storeWithCarry<0, blend>(row + x, m, v, carry, stored);
         // Blocks of 4 or 8 at multiples of their size: never across a word.
         unresolved[x >> 6] |= negativeBits(stored) << (x & 63);
     }
@@ -312,7 +336,7 @@ using Lanes8 = std::int32_t __attribute__((vector_size(32)));
 [[gnu::target("arch=x86-64-v3")]] void upLeftVersion(const std::uint8_t* c, const std::int32_t* a, std::int32_t* r,
                                                       int w)
 {
-    upLeftLanes<Lanes8>(c, a, r, w);
+    upLeftLanes<Lanes8, true>(c, a, r, w);
 }
 [[gnu::target("arch=x86-64-v4")]] void upLeftVersion(const std::uint8_t* c, const std::int32_t* a, std::int32_t* r,
                                                       int w)
@@ -327,7 +351,7 @@ using Lanes8 = std::int32_t __attribute__((vector_size(32)));
 [[gnu::target("arch=x86-64-v3")]] void sweepVersion(const std::uint8_t* c, const std::int32_t* a, std::int32_t* r,
                                                      int w, std::uint64_t* u)
 {
-    sweepLanes<Lanes8>(c, a, r, w, u);
+    sweepLanes<Lanes8, true>(c, a, r, w, u);
 }
 [[gnu::target("arch=x86-64-v4")]] void sweepVersion(const std::uint8_t* c, const std::int32_t* a, std::int32_t* r,
                                                      int w, std::uint64_t* u)

@@ -62,60 +62,35 @@ std::uint64_t raisedFlat(const std::uint8_t* codes, const std::uint8_t* levels)
     return (c << 4) & (((l & kLow7) + kLow7) | l) & kHigh;
 }
 
-// Per 8-bit mask, the positions of its set bits in increasing order (as
-// int32, for a vector add), and their count.
-struct SetBits {
-    std::array<std::array<std::int32_t, 8>, 256> positions{};
-    std::array<std::uint8_t, 256> count{};
-};
-constexpr SetBits kSetBits = [] {
-    SetBits bits;
-    for (int m = 0; m < 256; ++m)
-        for (int k = 0; k < 8; ++k)
-            if (m & (1 << k)) bits.positions[m][bits.count[m]++] = k;
-    return bits;
-}();
-
-// The columns x of a row's codes with bit 3 (kDescentFlat), in increasing
-// order; returns their count. Eight pixels per step without a branch per
-// pixel (a branch on each mispredicted): their bits 3 gathered into a byte by
-// one multiplication, its set bits' positions stored from a table. Writes up
-// to 8 entries past the count.
-int flatColumns(const std::uint8_t* code, int width, std::int32_t* __restrict columns)
+// Bit i set if code i of the span (at most 64) has bit 3 (kDescentFlat: in
+// step 3 the flat pixels, in step 4 the new minima's first pixels): 16 per
+// movemask (bit 3 shifted to each byte's bit 7) on SSE2, else 8 per
+// multiplication gathering the bits into a byte.
+std::uint64_t bit3Word(const std::uint8_t* code, int span)
 {
     static_assert(std::endian::native == std::endian::little, "byte k of the word is pixel k");
-    int count = 0, x = 0;
+    std::uint64_t bits = 0;
+    int x = 0;
 #if defined(__SSE2__)
-    // 16 bits 3 per movemask (bit 3 shifted to each byte's bit 7), the
-    // positions added in vectors (GCC vectorised the loop below only at times).
-    for (; x + 16 <= width; x += 16) {
-        const __m128i c = _mm_loadu_si128(reinterpret_cast<const __m128i*>(code + x));
-        const unsigned bits = static_cast<unsigned>(_mm_movemask_epi8(_mm_slli_epi16(c, 4)));
-        for (int half = 0; half < 2; ++half) {
-            const unsigned mask = bits >> (8 * half) & 0xff;
-            const __m128i base = _mm_set1_epi32(x + 8 * half);
-            const auto* positions = reinterpret_cast<const __m128i*>(kSetBits.positions[mask].data());
-            _mm_storeu_si128(reinterpret_cast<__m128i*>(columns + count),
-                             _mm_add_epi32(base, _mm_loadu_si128(positions)));
-            _mm_storeu_si128(reinterpret_cast<__m128i*>(columns + count + 4),
-                             _mm_add_epi32(base, _mm_loadu_si128(positions + 1)));
-            count += kSetBits.count[mask];
+    if (span == 64) {  // all words but a row's last: 4 steps without bounds
+        for (int i = 0; i < 4; ++i) {
+            const __m128i c = _mm_loadu_si128(reinterpret_cast<const __m128i*>(code + 16 * i));
+            bits |= std::uint64_t{static_cast<std::uint16_t>(_mm_movemask_epi8(_mm_slli_epi16(c, 4)))} << 16 * i;
         }
+        return bits;
+    }
+    for (; x + 16 <= span; x += 16) {
+        const __m128i c = _mm_loadu_si128(reinterpret_cast<const __m128i*>(code + x));
+        bits |= std::uint64_t{static_cast<std::uint16_t>(_mm_movemask_epi8(_mm_slli_epi16(c, 4)))} << x;
     }
 #endif
-    for (; x + 8 <= width; x += 8) {
+    for (; x + 8 <= span; x += 8) {
         std::uint64_t c;
         std::memcpy(&c, code + x, 8);
-        const unsigned mask = static_cast<unsigned>((((c >> 3) & 0x0101010101010101ull) * 0x0102040810204080ull) >> 56);
-        const std::int32_t* __restrict positions = kSetBits.positions[mask].data();
-        for (int k = 0; k < 8; ++k) columns[count + k] = x + positions[k];
-        count += kSetBits.count[mask];
+        bits |= (((c >> 3) & 0x0101010101010101ull) * 0x0102040810204080ull) >> 56 << x;
     }
-    for (; x < width; ++x) {
-        columns[count] = x;
-        count += code[x] >> 3 & 1;
-    }
-    return count;
+    for (; x < span; ++x) bits |= std::uint64_t{code[x] >> 3 & 1u} << x;
+    return bits;
 }
 
 // Root of a provisional label: roots hold ~(first pixel), others a smaller label.
@@ -148,15 +123,15 @@ RunWord* runWordsIn(std::int32_t* scratch, int width, int height)
     return reinterpret_cast<RunWord*>(scratch + offset + offset % 2);
 }
 
-// The first pixel of the run holding flat pixel x (the last start at or
-// before x), without a branch (runs end anywhere).
-std::int32_t runStart(const RunWord* words, int x)
+// The first pixel of the run holding flat pixel x of the word at column x0
+// (the last start at or before x; rarely one in the words before).
+// through: bits 0 to x - x0 set, as bits ^ (bits - 1) when x is the lowest
+// set bit of the bits a loop walks (cheaper than from x).
+std::int32_t runStart(const RunWord& word, int x0, std::uint64_t through)
 {
-    const RunWord& word = words[x >> 6];
-    const std::uint64_t before = word.starts & (~0ull >> (63 - (x & 63)));
-    const std::int32_t inWord = (x & ~63) + 63 - std::countl_zero(before | 1);
-    const std::int32_t found = -static_cast<std::int32_t>(before != 0);
-    return (inWord & found) | (word.lastStart & ~found);
+    const std::uint64_t before = word.starts & through;
+    const std::int32_t inWord = x0 + 63 - std::countl_zero(before | 1);
+    return before != 0 ? inWord : word.lastStart;  // a cmov (and-or masks took 3 more)
 }
 
 // Root of a basin in the union-find of excess basins (path halving).
@@ -170,26 +145,27 @@ std::int32_t findBasin(std::int32_t* parent, std::int32_t b)
 
 std::size_t watershedScratchEntries(int width, int height)
 {
-    // The codes and the wall, then the first pixels' columns of a row (and 8
-    // more), then the run words of two rows (after at most one entry to align
+    // The codes and the wall, then a row's minima codes (room for a row of
+    // int32 and 8 more), then the run words of two rows (after at most one entry to align
     // them; in step 4 the unresolved pixels' bits).
     return codeEntries(static_cast<std::size_t>(width) * height, width) + width + 8 + 1 +
            2 * runWords(width) * sizeof(RunWord) / sizeof(std::int32_t);
 }
 
-void computeWatershed(DecoderWorkspace& ws)
+// x86-64: clones for AVX2 and AVX-512 too (STRIA_X86_CLONES): the loops GCC
+// vectorises take 32 bytes per step, the bit loops BMI's tzcnt/blsr/shlx.
+STRIA_X86_CLONES void computeWatershed(DecoderWorkspace& ws)
 {
     const int w = ws.width, h = ws.height, n = w * h;
     const std::uint8_t* g = ws.gradient.get();
     std::int32_t* label = ws.labels.get();
     // Scratch: the codes, a row of 255 (the wall beyond the image border),
-    // a row's minima codes (bytes), later its first pixels' columns, and the
-    // run words (runWordsIn), later a row's unresolved pixels as bits.
+    // a row's minima codes (bytes), and the run words (runWordsIn), later a row's unresolved pixels as bits.
     auto* code = reinterpret_cast<std::uint8_t*>(ws.scratch.get());
     std::uint8_t* wall = code + n;
-    std::int32_t* columns = ws.scratch.get() + codeEntries(n, w);
     std::fill(wall, wall + w, 255);
-    const std::array<std::int32_t, 4> step{-w, -1, 1, w};
+    // (Pixel indices in the walks as std::ptrdiff_t: no sign extension per step.)
+    const std::array<std::ptrdiff_t, 4> step{-w, -1, 1, w};
 
     // 1. Arrows down the steepest 4-neighbour step.
     for (int y = 0; y < h; ++y)
@@ -213,11 +189,22 @@ void computeWatershed(DecoderWorkspace& ws)
         queue[tail++] = p;
     };
     // Flat pixels above level 0 (level 0 has no way down) are about 1 %:
-    // they are found 16 (SSE2) or 8 at a time.
+    // they are found 64 or 16 (SSE2) or 8 at a time.
     for (int y = 0; y < h; ++y) {
         int x = 0;
 #if defined(__SSE2__)
         const __m128i flat = _mm_set1_epi8(kDescentFlat), zero = _mm_setzero_si128();
+        // 64 at a time (one test per 64 pixels), then 16.
+        for (; x + 64 <= w; x += 64) {
+            std::uint64_t bits = 0;
+            for (int i = 0; i < 4; ++i) {
+                const __m128i c = _mm_loadu_si128(reinterpret_cast<const __m128i*>(code + y * w + x + 16 * i));
+                const __m128i l = _mm_loadu_si128(reinterpret_cast<const __m128i*>(g + y * w + x + 16 * i));
+                const auto raised = _mm_movemask_epi8(_mm_andnot_si128(_mm_cmpeq_epi8(l, zero), _mm_cmpeq_epi8(c, flat)));
+                bits |= std::uint64_t{static_cast<std::uint16_t>(raised)} << 16 * i;
+            }
+            for (; bits != 0; bits &= bits - 1) seed(x + std::countr_zero(bits), y);
+        }
         for (; x + 16 <= w; x += 16) {
             const __m128i c = _mm_loadu_si128(reinterpret_cast<const __m128i*>(code + y * w + x));
             const __m128i l = _mm_loadu_si128(reinterpret_cast<const __m128i*>(g + y * w + x));
@@ -261,22 +248,12 @@ void computeWatershed(DecoderWorkspace& ws)
     // take their basin by the union-find.
     std::fill(label, label + n, kUnresolved);
     std::int32_t* parent = ws.pixelOrder;
-    auto* minimumCode = reinterpret_cast<std::uint8_t*>(columns);
+    auto* minimumCode = reinterpret_cast<std::uint8_t*>(ws.scratch.get() + codeEntries(n, w));
     const int words = runWords(w);
     RunWord* runs = runWordsIn(ws.scratch.get(), w, h);
     RunWord* runsAbove = runs + words;
     std::fill(runsAbove, runsAbove + words, RunWord{});  // above row 0: none
     int provisional = 0, joined = 0;
-    // The 8 codes at p as a word, and bit k set if byte k of a word has bit 0.
-    auto codes8 = [](const std::uint8_t* p) {
-        static_assert(std::endian::native == std::endian::little, "byte k of the word is pixel k");
-        std::uint64_t c;
-        std::memcpy(&c, p, 8);
-        return c;
-    };
-    auto bitsOf = [](std::uint64_t word) {
-        return static_cast<unsigned>(((word & 0x0101010101010101ull) * 0x0102040810204080ull) >> 56);
-    };
     // The codes by byte masks, which the compiler vectorises (ternaries
     // became branches).
     auto mask = [](bool condition) { return static_cast<std::uint8_t>(-static_cast<int>(condition)); };
@@ -288,18 +265,9 @@ void computeWatershed(DecoderWorkspace& ws)
         std::uint64_t carry = 0, carryAbove = 0;  // bit 63 of the previous word
         std::int32_t last = 0;
         for (int k = 0; k < words; ++k) {
-            const int x0 = 64 * k, span = std::min(64, w - x0);
-            std::uint64_t flat = 0;  // code kDescentFlat, the only one with bit 3
-            int x = x0;
-#if defined(__SSE2__)
-            // 16 bits 3 per movemask (bit 3 shifted to each byte's bit 7).
-            for (; x + 16 <= x0 + span; x += 16) {
-                const __m128i c = _mm_loadu_si128(reinterpret_cast<const __m128i*>(rowCode + x));
-                flat |= std::uint64_t{static_cast<std::uint16_t>(_mm_movemask_epi8(_mm_slli_epi16(c, 4)))} << (x - x0);
-            }
-#endif
-            for (; x + 8 <= x0 + span; x += 8) flat |= std::uint64_t{bitsOf(codes8(rowCode + x) >> 3)} << (x - x0);
-            for (; x < x0 + span; ++x) flat |= std::uint64_t{rowCode[x] == kDescentFlat} << (x - x0);
+            const int x0 = 64 * k;
+            // Code kDescentFlat, the only one with bit 3.
+            const std::uint64_t flat = bit3Word(rowCode + x0, std::min(64, w - x0));
             const std::uint64_t left = flat << 1 | carry, above = runsAbove[k].flat,
                                 aboveLeft = above << 1 | carryAbove;
             carry = flat >> 63;
@@ -312,22 +280,23 @@ void computeWatershed(DecoderWorkspace& ws)
             word.lastStart = last;
             if (word.starts != 0) last = x0 + 63 - std::countl_zero(word.starts);
         }
+        // The new minima take the next provisional labels (in raster order),
+        // the other runs the label of the run above their first pixel: two
+        // loops on the two kinds of first pixels (no branch between them).
         for (int k = 0; k < words; ++k)
-            for (std::uint64_t bits = runs[k].starts; bits != 0; bits &= bits - 1) {
+            for (std::uint64_t bits = runs[k].fresh; bits != 0; bits &= bits - 1) {
                 const int x = 64 * k + std::countr_zero(bits);
-                // Without a branch: -1 for a new minimum (which reads a label
-                // above in vain and keeps its parent entry).
-                const std::int32_t fresh = -static_cast<std::int32_t>(runs[k].fresh >> (x & 63) & 1);
-                const std::int32_t above = ~labelAbove[runStart(runsAbove, x)];
                 parent[provisional] = ~(y * w + x);
-                row[x] = ~((provisional & fresh) | (above & ~fresh));
-                provisional -= fresh;
+                row[x] = ~provisional++;
             }
         for (int k = 0; k < words; ++k)
+            for (std::uint64_t bits = runs[k].starts & ~runs[k].fresh; bits != 0; bits &= bits - 1)
+                row[64 * k + std::countr_zero(bits)] = labelAbove[runStart(runsAbove[k], 64 * k, bits ^ (bits - 1))];
+        for (int k = 0; k < words; ++k)
             for (std::uint64_t bits = runs[k].joins; bits != 0; bits &= bits - 1) {
-                const int x = 64 * k + std::countr_zero(bits);
-                const std::int32_t a = findRoot(parent, ~row[runStart(runs, x)]),
-                                   b = findRoot(parent, ~labelAbove[runStart(runsAbove, x)]);
+                const std::uint64_t through = bits ^ (bits - 1);
+                const std::int32_t a = findRoot(parent, ~row[runStart(runs[k], 64 * k, through)]),
+                                   b = findRoot(parent, ~labelAbove[runStart(runsAbove[k], 64 * k, through)]);
                 if (a != b) {
                     parent[std::max(a, b)] = std::min(a, b);
                     ++joined;
@@ -399,18 +368,20 @@ void computeWatershed(DecoderWorkspace& ws)
         std::int32_t* row = label + y * w;
         // The new minima's first pixels hold provisional labels 0, 1, 2, ...
         // in raster order (step 3): the label is the count so far, not loaded.
-        const int firstPixels = flatColumns(rowCode, w, columns);
-        for (int i = 0; i < firstPixels; ++i) row[columns[i]] = parent[firstSeen + i];
-        firstSeen += firstPixels;
+        // Their pixels are the only ones with code bit 3 (kMinimumArrow |
+        // kDescentFlat), found 64 at a time.
+        for (int x0 = 0; x0 < w; x0 += 64)
+            for (std::uint64_t bits = bit3Word(rowCode + x0, std::min(64, w - x0)); bits != 0; bits &= bits - 1)
+                row[x0 + std::countr_zero(bits)] = parent[firstSeen++];
         sweepRow(rowCode, y > 0 ? row - w : row, row, w, unresolved);  // no arrow up in row 0
         for (int x0 = 0; x0 < w; x0 += 64) {
             std::uint64_t bits = unresolved[x0 / 64];
-            auto labelPath = [&](int p, int q) {
+            auto labelPath = [&](std::ptrdiff_t p, std::ptrdiff_t q) {
                 // Without a branch (it mispredicted): parent[0] read in vain
                 // if the end's label is final.
                 const std::int32_t end = label[q], provisional = end >> 31;  // -1 if ~(a provisional label)
                 const std::int32_t basin = end ^ ((end ^ parent[~end & provisional]) & provisional);
-                for (int r = p; r != q; r += step[code[r] & 3]) label[r] = basin;
+                for (std::ptrdiff_t r = p; r != q; r += step[code[r] & 3]) label[r] = basin;
             };
             // Two walks at a time: each step waits on the previous one's
             // loads (often L1 misses: a step down is a row away), so two
@@ -421,17 +392,17 @@ void computeWatershed(DecoderWorkspace& ws)
             // unique), so labelling one path over the other writes the same
             // basin.
             while (bits != 0) {
-                const int p1 = y * w + x0 + std::countr_zero(bits);
+                const std::ptrdiff_t p1 = y * w + x0 + std::countr_zero(bits);
                 bits &= bits - 1;
-                int q1 = p1;
+                std::ptrdiff_t q1 = p1;
                 if (bits == 0) {
                     while (label[q1] == kUnresolved) q1 += step[code[q1] & 3];
                     labelPath(p1, q1);
                     break;
                 }
-                const int p2 = y * w + x0 + std::countr_zero(bits);
+                const std::ptrdiff_t p2 = y * w + x0 + std::countr_zero(bits);
                 bits &= bits - 1;
-                int q2 = p2;
+                std::ptrdiff_t q2 = p2;
                 while (label[q1] == kUnresolved && label[q2] == kUnresolved) {
                     q1 += step[code[q1] & 3];
                     q2 += step[code[q2] & 3];
