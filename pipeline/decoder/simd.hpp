@@ -21,7 +21,12 @@
 // medians: watershed 1.33 -> 1.21 ms by the AVX-512 clones' one-instruction
 // selects (vpternlogd) with the carry of storeWithCarry, then -0.03-0.05 ms
 // by the 8-label blocks; gradient 0.44 -> 0.42 (the region medians: no
-// faster). tests/decoder runs the kernel tests again under qemu-x86_64 on
+// faster). Since session 8 also: computeWatershed and descentRow as clones,
+// computePoints (depth.cpp) as clones, with
+// the edge sample windows as one definition per target (simd_edges.cpp: the
+// AVX2 body gathers a channel's 8 samples by vpshufb), and the region copy
+// pass (regions.cpp: 4 pixels per byte shuffle on x86-64-v3; tbl on
+// AArch64). tests/decoder runs the kernel tests again under qemu-x86_64 on
 // CPUs without AVX-512 and without AVX (the AVX2 and SSE2 versions).
 #if defined(__x86_64__)
 #define STRIA_X86_CLONES __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
