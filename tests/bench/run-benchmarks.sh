@@ -26,15 +26,26 @@ bench=$build/tests/bench/stria_bench
 [[ -x $bench ]] || { echo "run-benchmarks.sh: $bench was not built (is STRIA_BUILD_BENCHMARKS on?)" >&2; exit 1; }
 
 json=$build/bench-results.json
+stage_json=$build/bench-stages.json
 load=$(cut -d' ' -f1-3 /proc/loadavg)
 # Random interleaving: the repetitions of all benchmarks run in a shuffled
 # order, so a slow spell of a shared machine falls on the decode and on its
 # Sobel reference alike instead of on whichever ran then (this VM's speed
 # drifts by 30 % within minutes), and the ratios of medians compare like
 # with like.
-"$bench" --benchmark_repetitions="$repetitions" --benchmark_report_aggregates_only=true \
-    --benchmark_enable_random_interleaving=true \
+echo "run-benchmarks.sh: whole decodes, references and video mode ($repetitions repetitions)..." >&2
+"$bench" --benchmark_filter='-^stage/' --benchmark_repetitions="$repetitions" \
+    --benchmark_report_aggregates_only=true --benchmark_enable_random_interleaving=true \
     --benchmark_out="$json" --benchmark_out_format=json
+# The stages alone in a run of their own, with the Sobel BGR reference
+# interleaved again, each repetition timing 50 ms of the stage: every
+# iteration first repeats the earlier stages untimed (the edge stage's 0.3
+# ms follow 7 ms of them), so the default 0.5 s of timed work made this part
+# alone take most of an hour at 10 repetitions.
+echo "run-benchmarks.sh: each stage alone ($repetitions repetitions)..." >&2
+"$bench" --benchmark_filter='^(stage/|sobel/bgr_)' --benchmark_min_time=0.05 --benchmark_repetitions="$repetitions" \
+    --benchmark_report_aggregates_only=true --benchmark_enable_random_interleaving=true \
+    --benchmark_out="$stage_json" --benchmark_out_format=json
 
 compiler=$(sed -n 's/^CMAKE_CXX_COMPILER:[A-Z]*=//p' "$build/CMakeCache.txt")
 export STRIA_BENCH_COMPILER="$("${compiler:-c++}" --version | head -n1)"
@@ -43,21 +54,26 @@ export STRIA_BENCH_CORES="$(nproc) cores available ($(lscpu | sed -n 's/^CPU(s):
 export STRIA_BENCH_LOAD="$load"
 export STRIA_BENCH_REPETITIONS="$repetitions"
 export STRIA_BENCH_SOURCE="$(git describe --always --dirty 2>/dev/null || echo unknown)"
-python3 - "$json" docs/performance.md <<'EOF'
+python3 - "$json" "$stage_json" docs/performance.md <<'EOF'
 import datetime, json, os, sys
 
-json_path, doc_path = sys.argv[1], sys.argv[2]
-runs = json.load(open(json_path))["benchmarks"]
-median = {r["run_name"]: r for r in runs if r.get("aggregate_name") == "median"}
-errors = sorted({r["run_name"] + ": " + r.get("error_message", "") for r in runs if r.get("error_occurred")})
-if errors:
-    sys.exit("run-benchmarks.sh: benchmarks reported errors, docs not updated:\n  " + "\n  ".join(errors))
+json_path, stage_json_path, doc_path = sys.argv[1], sys.argv[2], sys.argv[3]
 
-def get(name):
+def medians(path):
+    runs = json.load(open(path))["benchmarks"]
+    errors = sorted({r["run_name"] + ": " + r.get("error_message", "") for r in runs if r.get("error_occurred")})
+    if errors:
+        sys.exit("run-benchmarks.sh: benchmarks reported errors, docs not updated:\n  " + "\n  ".join(errors))
+    return {r["run_name"]: r for r in runs if r.get("aggregate_name") == "median"}, path
+
+main_run, stage_run = medians(json_path), medians(stage_json_path)
+
+def get(name, run=main_run):
+    median, path = run
     for run_name, r in median.items():
         if run_name == name or run_name.startswith(name + "/"):
             return r
-    sys.exit(f"run-benchmarks.sh: no median for benchmark '{name}' in {json_path}")
+    sys.exit(f"run-benchmarks.sh: no median for benchmark '{name}' in {path}")
 
 def ms(r, key="cpu_time"):
     scale = {"ns": 1e-6, "us": 1e-3, "ms": 1.0, "s": 1e3}[r["time_unit"]]
@@ -100,13 +116,14 @@ for size in TARGETS:
                f" | {d['superpixels']:.0f} | {d['graph_edges']:.0f} |")
 out.append("")
 out.append("Each stage alone (`stage/<stage>_<size>`: Decoder::repeatStage after the earlier stages, which run "
-           "with the timer paused; CPU time, ms, and in Sobel BGR passes):")
+           "with the timer paused; a run of its own, 50 ms of timed work per repetition, with the Sobel BGR "
+           "reference interleaved again; CPU time, ms, and in that run's Sobel BGR passes):")
 out.append("")
 out.append("| frame | " + " | ".join(stages[:-1]) + " | sum |")
 out.append("|---|" + "---|" * len(stages))
 for size in TARGETS:
-    sb = ms(get(f"sobel/bgr_{size}"))
-    alone = [ms(get(f"stage/{s}_{size}")) for s in stages[:-1]]
+    sb = ms(get(f"sobel/bgr_{size}", stage_run))
+    alone = [ms(get(f"stage/{s}_{size}", stage_run)) for s in stages[:-1]]
     out.append(f"| {size} | " + " | ".join(f"{t:.2f} ({t / sb:.1f})" for t in alone) +
                f" | {sum(alone):.2f} ({sum(alone) / sb:.1f}) |")
 out.append("")
