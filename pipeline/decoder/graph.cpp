@@ -271,10 +271,19 @@ void buildGraph(DecoderWorkspace& ws)
     // kernels' broadcasts of it are hoisted (the edge sums' float stores
     // might alias the workspace's).
     const cv::Vec2f primary = ws.primary;
+    // The kernels' weights: the folded ones (a multiply less per pair) in
+    // the unchecked rows, which take them only where they give the same
+    // floats (quarterFolds); else the rows take the checked look-ups (the
+    // same edges, only slower) and the plain weights.
+    const graph_kernels::PairWeights plain = graph_kernels::plainWeights(primary);
+    const graph_kernels::PairWeights horizontalWeights = graph_kernels::horizontalFoldedWeights(primary);
+    const graph_kernels::PairWeights verticalWeights = graph_kernels::verticalFoldedWeights(primary);
+    const bool folds = graph_kernels::quarterFolds(primary);
     const int words = borderWords(w);
     const int lastH = w - 2;  // the last horizontal pair, in the last word
     const std::uint64_t lastHBit = std::uint64_t{1} << (lastH & 63);
     auto addRow = [&](int y, auto checked) {
+        constexpr bool kFolded = !decltype(checked)::value;
         const std::int32_t* row = label + static_cast<std::ptrdiff_t>(y) * w;
         const std::uint8_t* up = ws.frame.row(std::max(y - 1, 0));
         const std::uint8_t* pixels = ws.frame.row(y);
@@ -283,7 +292,9 @@ void buildGraph(DecoderWorkspace& ws)
         auto horizontalPairs = [&](std::size_t i0, std::uint64_t bits) {
             for (; bits; bits &= bits - 1) {
                 const std::size_t x = i0 + static_cast<unsigned>(std::countr_zero(bits));
-                addPair(labelPair(row + x), true, graph_kernels::horizontalPair(up, pixels, down, x, primary), checked);
+                addPair(labelPair(row + x), true,
+                        graph_kernels::horizontalPair<kFolded>(up, pixels, down, x, kFolded ? horizontalWeights : plain),
+                        checked);
             }
         };
         if (lastH >= 0) {
@@ -304,7 +315,8 @@ void buildGraph(DecoderWorkspace& ws)
                 for (std::uint64_t bits = mask; bits; bits &= bits - 1) {
                     const std::size_t x = static_cast<unsigned>(i0) + static_cast<unsigned>(std::countr_zero(bits));
                     addPair(labelPair(row[x], row[x + w]), false,
-                            graph_kernels::verticalPair(pixels, down, x, primary), checked);
+                            graph_kernels::verticalPair<kFolded>(pixels, down, x, kFolded ? verticalWeights : plain),
+                            checked);
                 }
                 first = ~std::uint64_t{0};
             }
@@ -317,7 +329,7 @@ void buildGraph(DecoderWorkspace& ws)
     // takes the unchecked look-ups; else (only near the capacity) the checked ones.
     const std::int32_t rowEdges = 2 * w;
     for (int y = 0; y < h; ++y) {
-        if (rowEdges <= capacity - edgeCount) {
+        if (rowEdges <= capacity - edgeCount && folds) {
             while (cleared < edgeCount + rowEdges) clearAhead();
             addRow(y, std::false_type{});
         } else {

@@ -66,12 +66,12 @@ std::uint64_t borderMask(const std::int32_t* a, const std::int32_t* b, int count
 PairGradient horizontalPairGradient(const std::uint8_t* up, const std::uint8_t* row, const std::uint8_t* down, int x,
                                     const cv::Vec2f& primary)
 {
-    return graph_kernels::horizontalPair(up, row, down, x, primary);
+    return graph_kernels::horizontalPair(up, row, down, x, graph_kernels::plainWeights(primary));
 }
 
 PairGradient verticalPairGradient(const std::uint8_t* row, const std::uint8_t* below, int x, const cv::Vec2f& primary)
 {
-    return graph_kernels::verticalPair(row, below, x, primary);
+    return graph_kernels::verticalPair(row, below, x, graph_kernels::plainWeights(primary));
 }
 
 }  // namespace stria::pipeline

@@ -18,6 +18,39 @@
 
 namespace stria::pipeline::graph_kernels {
 
+// A pair's terms from its channel differences gx, gy (one of them to be
+// quartered, below): along = |gx xAlong + gy yAlong| and across = |gx xAcross
+// + gy yAcross|, per channel, summed over the channels as pairGradient does.
+// plainWeights gives pairGradient's own products (gx px + gy py and -gx py +
+// gy px; -gx py is gx (-py), the same float), on the quartered difference.
+//
+// The folded weights take the 0.25 into the weights of the quartered
+// component instead (horizontal pairs: gy's, vertical ones: gx's), a
+// multiply less per pair. The same floats where quarterFolds(primary):
+// s * 0.25 (s an integer) and p * 0.25 are exact, so (0.25 s) p and
+// s (0.25 p) are the one rounding of s p / 4, unless 0.25 p or the product
+// is subnormal (|p| < 2^-124, never for a unit direction that is not 0).
+struct PairWeights {
+    float xAlong, yAlong, xAcross, yAcross;
+};
+inline PairWeights plainWeights(const cv::Vec2f& primary)
+{
+    return {primary[0], primary[1], -primary[1], primary[0]};
+}
+inline PairWeights horizontalFoldedWeights(const cv::Vec2f& primary)
+{
+    return {primary[0], 0.25f * primary[1], -primary[1], 0.25f * primary[0]};
+}
+inline PairWeights verticalFoldedWeights(const cv::Vec2f& primary)
+{
+    return {0.25f * primary[0], primary[1], -0.25f * primary[1], primary[0]};
+}
+inline bool quarterFolds(const cv::Vec2f& primary)
+{
+    auto folds = [](float p) { return p == 0 || !(std::abs(p) < 0x1p-124f); };  // NaN: NaN either way
+    return folds(primary[0]) && folds(primary[1]);
+}
+
 // The kernels take 8 bytes from each row (two pixels and two bytes), widen
 // them to int16 lanes, form the reference's integer differences (exact), and
 // only then convert the lanes of pixel x's three channels to float.
@@ -30,11 +63,10 @@ inline Int16s plus(Int16s a, Int16s b) { return vaddq_s16(a, b); }
 inline Int16s minus(Int16s a, Int16s b) { return vsubq_s16(a, b); }
 inline Floats firstPixel(Int16s v) { return vcvtq_f32_s32(vmovl_s16(vget_low_s16(v))); }
 inline Floats quarter(Floats v) { return vmulq_n_f32(v, 0.25f); }
-inline PairGradient pairTerms(Floats gx, Floats gy, const cv::Vec2f& primary)
+inline PairGradient pairTerms(Floats gx, Floats gy, const PairWeights& w)
 {
-    const float px = primary[0], py = primary[1];
-    const Floats along = vabsq_f32(vaddq_f32(vmulq_n_f32(gx, px), vmulq_n_f32(gy, py)));
-    const Floats across = vabsq_f32(vaddq_f32(vmulq_n_f32(vnegq_f32(gx), py), vmulq_n_f32(gy, px)));
+    const Floats along = vabsq_f32(vaddq_f32(vmulq_n_f32(gx, w.xAlong), vmulq_n_f32(gy, w.yAlong)));
+    const Floats across = vabsq_f32(vaddq_f32(vmulq_n_f32(gx, w.xAcross), vmulq_n_f32(gy, w.yAcross)));
     // The reference's sums, channel by channel (0 + a = a for a >= +0).
     return {(vgetq_lane_f32(along, 0) + vgetq_lane_f32(along, 1)) + vgetq_lane_f32(along, 2),
             (vgetq_lane_f32(across, 0) + vgetq_lane_f32(across, 1)) + vgetq_lane_f32(across, 2)};
@@ -51,15 +83,15 @@ inline Int16s plus(Int16s a, Int16s b) { return _mm_add_epi16(a, b); }
 inline Int16s minus(Int16s a, Int16s b) { return _mm_sub_epi16(a, b); }
 inline Floats firstPixel(Int16s v) { return _mm_cvtepi32_ps(_mm_srai_epi32(_mm_unpacklo_epi16(v, v), 16)); }
 inline Floats quarter(Floats v) { return _mm_mul_ps(v, _mm_set1_ps(0.25f)); }
-inline PairGradient pairTerms(Floats gx, Floats gy, const cv::Vec2f& primary)
+inline PairGradient pairTerms(Floats gx, Floats gy, const PairWeights& w)
 {
-    // -gx * py as gx * -py (the same float: rounding is symmetric), and |v|
-    // as v & 0x7fffffff (andps takes its operands in either order, andnps
+    // |v| as v & 0x7fffffff (andps takes its operands in either order, andnps
     // needed a copy of the sign mask): fewer instructions, the same bits.
-    const __m128 px = _mm_set1_ps(primary[0]), py = _mm_set1_ps(primary[1]), minusPy = _mm_set1_ps(-primary[1]);
+    const __m128 xAlong = _mm_set1_ps(w.xAlong), yAlong = _mm_set1_ps(w.yAlong);
+    const __m128 xAcross = _mm_set1_ps(w.xAcross), yAcross = _mm_set1_ps(w.yAcross);
     const __m128 magnitude = _mm_castsi128_ps(_mm_set1_epi32(0x7fffffff));
-    const __m128 along = _mm_and_ps(_mm_add_ps(_mm_mul_ps(gx, px), _mm_mul_ps(gy, py)), magnitude);
-    const __m128 across = _mm_and_ps(_mm_add_ps(_mm_mul_ps(gx, minusPy), _mm_mul_ps(gy, px)), magnitude);
+    const __m128 along = _mm_and_ps(_mm_add_ps(_mm_mul_ps(gx, xAlong), _mm_mul_ps(gy, yAlong)), magnitude);
+    const __m128 across = _mm_and_ps(_mm_add_ps(_mm_mul_ps(gx, xAcross), _mm_mul_ps(gy, yAcross)), magnitude);
     // {along0, across0, along1, across1} + {along1, across1, ..}, then
     // + {along2, across2, ..}: the reference's sums, channel by channel
     // (0 + a = a for a >= +0). The upper half by pshufd, which needs no copy.
@@ -73,43 +105,50 @@ inline PairGradient pairTerms(Floats gx, Floats gy, const cv::Vec2f& primary)
 #endif
 
 
+// kFolded: w are the folded weights (horizontalFoldedWeights /
+// verticalFoldedWeights), else plainWeights and the quarter taken here.
+template <bool kFolded = false>
 inline PairGradient horizontalPair(const std::uint8_t* up, const std::uint8_t* row, const std::uint8_t* down,
-                                   std::size_t x, const cv::Vec2f& primary)
+                                   std::size_t x, const PairWeights& w)
 {
     const std::size_t i = 3 * x;
 #if defined(__ARM_NEON) || defined(__SSE2__)
     const Int16s here = bytes8(row + i), vertical = minus(bytes8(down + i), bytes8(up + i));
-    return pairTerms(firstPixel(minus(nextPixel(here), here)), quarter(firstPixel(plus(vertical, nextPixel(vertical)))),
-                     primary);
+    const Floats gy = firstPixel(plus(vertical, nextPixel(vertical)));
+    return pairTerms(firstPixel(minus(nextPixel(here), here)), kFolded ? gy : quarter(gy), w);
 #else
     PairGradient out;
     for (int c = 0; c < 3; ++c) {
         const float gx = static_cast<float>(row[i + 3 + c] - row[i + c]);
-        const float gy = 0.25f * static_cast<float>(down[i + c] - up[i + c] + down[i + 3 + c] - up[i + 3 + c]);
-        out.primary += std::abs(gx * primary[0] + gy * primary[1]);
-        out.secondary += std::abs(-gx * primary[1] + gy * primary[0]);
+        const float sy = static_cast<float>(down[i + c] - up[i + c] + down[i + 3 + c] - up[i + 3 + c]);
+        const float gy = kFolded ? sy : 0.25f * sy;
+        out.primary += std::abs(gx * w.xAlong + gy * w.yAlong);
+        out.secondary += std::abs(gx * w.xAcross + gy * w.yAcross);
     }
     return out;
 #endif
 }
 
+template <bool kFolded = false>
 inline PairGradient verticalPair(const std::uint8_t* row, const std::uint8_t* below, std::size_t x,
-                                 const cv::Vec2f& primary)
+                                 const PairWeights& w)
 {
     const std::size_t i = 3 * x;
 #if defined(__ARM_NEON) || defined(__SSE2__)
     const Int16s here = bytes8(row + i), hereBelow = bytes8(below + i);
     const Int16s across =
         plus(minus(nextPixel(here), bytes8(row + i - 3)), minus(nextPixel(hereBelow), bytes8(below + i - 3)));
-    return pairTerms(quarter(firstPixel(across)), firstPixel(minus(hereBelow, here)), primary);
+    const Floats gx = firstPixel(across);
+    return pairTerms(kFolded ? gx : quarter(gx), firstPixel(minus(hereBelow, here)), w);
 #else
     PairGradient out;
     for (int c = 0; c < 3; ++c) {
         const float gy = static_cast<float>(below[i + c] - row[i + c]);
-        const float gx =
-            0.25f * static_cast<float>(row[i + 3 + c] - row[i - 3 + c] + below[i + 3 + c] - below[i - 3 + c]);
-        out.primary += std::abs(gx * primary[0] + gy * primary[1]);
-        out.secondary += std::abs(-gx * primary[1] + gy * primary[0]);
+        const float sx =
+            static_cast<float>(row[i + 3 + c] - row[i - 3 + c] + below[i + 3 + c] - below[i - 3 + c]);
+        const float gx = kFolded ? sx : 0.25f * sx;
+        out.primary += std::abs(gx * w.xAlong + gy * w.yAlong);
+        out.secondary += std::abs(gx * w.xAcross + gy * w.yAcross);
     }
     return out;
 #endif

@@ -646,6 +646,25 @@ TEST(DecoderKernels, RegionsAndGraphMatchReferencesOnTinyImages)
     }
 }
 
+TEST(DecoderKernels, GraphMatchesReferenceForTinyAndZeroPrimaryComponents)
+{
+    // buildGraph's pair kernels take the 0.25 of a pair's quartered
+    // difference into the primary direction's components (one multiply less
+    // per pair), which gives pairGradient's floats unless a component is
+    // below 2^-124 (0.25 p or the product subnormal): those directions take
+    // the unfolded kernels.
+    const cv::Mat noise = randomFrame(97, 61, 12);
+    for (const cv::Vec2f primary : {cv::Vec2f(1.0f, 0.0f), cv::Vec2f(0.0f, -1.0f), cv::Vec2f(1.1e-38f, -3.3e-38f),
+                                    cv::Vec2f(-1.3e-39f, 2.9e-39f), cv::Vec2f(0x1p-124f, 0x1.8p-123f),
+                                    cv::Vec2f(3e38f, 0.5f)}) {
+        FloodCase c(noise, 97 * 61);
+        c.ws.primary = primary;
+        c.differingLabels();
+        EXPECT_EQ(c.differingRegions(), 0);
+        EXPECT_EQ(c.differingGraphEdges(), 0) << primary;
+    }
+}
+
 TEST(DecoderKernels, GraphNormalsSaturateLikeTheReference)
 {
     // Three labels in diagonal stripes, (x + y) mod 3 and (x - y) mod 3:
