@@ -343,12 +343,15 @@ void buildGraph(DecoderWorkspace& ws)
     // list position counted in a compact array in the scratch
     // (graphScratchEntries), not in the 64-byte region records: those are
     // written once, in order, instead of being incremented at random 4
-    // times per edge.
+    // times per edge. (The counts and the lists in locals: the workspace's
+    // fields were loaded again after each store.)
     Region* regions = ws.regions.get();
+    const int regionCount = ws.regionCount;
+    std::int32_t* adjacency = ws.adjacency.get();
     std::int32_t* next = ws.scratch.get() + 2 * static_cast<std::ptrdiff_t>(ws.maxEdges) + 2;
-    std::fill(next, next + ws.regionCount, 0);
+    std::fill(next, next + regionCount, 0);
     bool saturating = false;
-    for (int e = 0; e < ws.edgeCount; ++e) {
+    for (int e = 0; e < edgeCount; ++e) {
         const std::int32_t a = edges[e].a, b = edges[e].b;
         edges[e].normalY = static_cast<std::int16_t>(edges[e].normalY + (edges[e].normalX < 0));  // addPair's borrow
         saturating |= edges[e].borderCount >= kSaturatingCount;
@@ -357,15 +360,16 @@ void buildGraph(DecoderWorkspace& ws)
     }
     if (saturating) [[unlikely]] recountSaturatingNormals(ws, lookup);
     std::int32_t offset = 0;
-    for (int r = 0; r < ws.regionCount; ++r) {
+    for (int r = 0; r < regionCount; ++r) {
+        const std::int32_t degree = next[r];
         regions[r].adjacencyBegin = offset;
-        regions[r].degree = next[r];
+        regions[r].degree = degree;
         next[r] = offset;
-        offset += regions[r].degree;
+        offset += degree;
     }
-    for (int e = 0; e < ws.edgeCount; ++e) {
-        ws.adjacency[next[edges[e].a]++] = e;
-        ws.adjacency[next[edges[e].b]++] = e;
+    for (int e = 0; e < edgeCount; ++e) {
+        adjacency[next[edges[e].a]++] = e;
+        adjacency[next[edges[e].b]++] = e;
     }
 }
 
