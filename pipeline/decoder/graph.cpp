@@ -97,8 +97,22 @@ std::uint64_t keyOf(const GraphEdge& edge)
 }
 void setKey(GraphEdge& edge, std::uint64_t key) { std::memcpy(&edge.a, &key, sizeof key); }
 
-// buildGraph's hash table of edge indices by key; find gives the edge of a
-// key, or -1 for a pair past the capacity.
+// buildGraph's hash table holds an edge's record as its offset in words
+// (3 e: a GraphEdge is 3 words), which addresses the record without a
+// multiply by 24 (x86-64: an index scaled by 8; AArch64: a shifted register).
+static_assert(sizeof(GraphEdge) == 3 * sizeof(std::uint64_t));
+constexpr std::uint32_t kEdgeWords = 3;
+GraphEdge* recordAt(GraphEdge* edges, std::uint32_t words)
+{
+    return reinterpret_cast<GraphEdge*>(reinterpret_cast<char*>(edges) + sizeof(std::uint64_t) * std::size_t{words});
+}
+const GraphEdge* recordAt(const GraphEdge* edges, std::uint32_t words)
+{
+    return recordAt(const_cast<GraphEdge*>(edges), words);
+}
+
+// buildGraph's hash table of edge offsets by key; find gives the edge
+// (its index) of a key, or -1 for a pair past the capacity.
 struct EdgeTable {
     const std::int32_t* table;
     std::size_t size;
@@ -108,8 +122,9 @@ struct EdgeTable {
     std::int32_t find(std::uint64_t key) const
     {
         std::uint64_t at = slot(key);
-        while (table[at] >= 0 && keyOf(edges[table[at]]) != key) at = (at + 1) & (size - 1);
-        return table[at];
+        while (table[at] >= 0 && keyOf(*recordAt(edges, static_cast<std::uint32_t>(table[at]))) != key)
+            at = (at + 1) & (size - 1);
+        return table[at] < 0 ? -1 : table[at] / static_cast<std::int32_t>(kEdgeWords);
     }
 };
 
@@ -182,7 +197,10 @@ void buildGraph(DecoderWorkspace& ws)
     // registers (the edge count is in every look-up's dependency chain).
     GraphEdge* edges = ws.edges.get();
     const EdgeTable lookup{table, tableSize, shift, edges};
-    std::int32_t edgeCount = 0;
+    // The edges so far as words of records (kEdgeWords per edge, the
+    // table's unit): edgeCount().
+    std::int32_t edgeWords = 0;
+    auto edgeCount = [&] { return edgeWords / static_cast<std::int32_t>(kEdgeWords); };
     // Edge records are cleared ahead of the count, 64 at a time.
     constexpr std::int32_t kClearBlock = 64;
     std::int32_t cleared = 0;
@@ -203,7 +221,7 @@ void buildGraph(DecoderWorkspace& ws)
     GraphEdge overflow;
     auto edgeOf = [&](std::uint64_t key, auto checked) -> GraphEdge* {
         if constexpr (checked) {
-            if (edgeCount == capacity) [[unlikely]] {
+            if (edgeCount() == capacity) [[unlikely]] {
                 const std::int32_t e = lookup.find(key);
                 ws.truncated |= e < 0;
                 return e < 0 ? &overflow : edges + e;
@@ -211,32 +229,34 @@ void buildGraph(DecoderWorkspace& ws)
         }
         std::uint64_t slot = lookup.slot(key);
         // The key goes in ahead into the next free record (cleared, below
-        // the capacity), and an empty slot (-1) reads as that index (the
-        // unsigned minimum: stored indices are below it), so the probe stops
+        // the capacity), and an empty slot (-1) reads as that record's
+        // offset (the unsigned minimum: stored ones are below it), so the probe stops
         // at the edge or at the empty slot by one compare, and whether the
         // edge is new (a fifth of the look-ups, in no pattern a branch
         // predictor learns) is selected, not branched on (GCC 12 makes the
         // minimum a cmov with the signed count, a branch with an unsigned
         // one: check the mispredictions when changing it). The record's
         // other fields are only written once it is the pair's edge.
-        const auto next = static_cast<std::uint32_t>(edgeCount);
-        setKey(edges[next], key);
+        const auto next = static_cast<std::uint32_t>(edgeWords);
+        setKey(*recordAt(edges, next), key);
         auto probe = [&] { return std::min(static_cast<std::uint32_t>(table[slot]), next); };
         std::uint32_t e = probe();
         // A collision: about 1 look-up in 12 (the collision loop out of the
         // way of the first probe's: a jump less per pair).
-        if (keyOf(edges[e]) != key) [[unlikely]] {
+        if (keyOf(*recordAt(edges, e)) != key) [[unlikely]] {
             do {
                 slot = (slot + 1) & (tableSize - 1);
                 e = probe();
-            } while (keyOf(edges[e]) != key);
+            } while (keyOf(*recordAt(edges, e)) != key);
         }
         table[slot] = static_cast<std::int32_t>(e);
-        edgeCount += e >= next;  // e <= next: new where equal (compare and add with carry)
+        // e <= next, new where equal: the next record is past e's then, and
+        // else the same (a stored e is at most next - kEdgeWords).
+        edgeWords = static_cast<std::int32_t>(std::max(e + kEdgeWords, next));
         if constexpr (checked) {
-            if (edgeCount >= cleared) [[unlikely]] clearAhead();  // every 64 new edges (none once full)
+            if (edgeCount() >= cleared) [[unlikely]] clearAhead();  // every 64 new edges (none once full)
         }
-        return edges + e;
+        return recordAt(edges, e);
     };
 
     // Adds border pair p-q (q right of p or below it) to its edge, given
@@ -333,15 +353,15 @@ void buildGraph(DecoderWorkspace& ws)
     // takes the unchecked look-ups; else (only near the capacity) the checked ones.
     const std::int32_t rowEdges = 2 * w;
     for (int y = 0; y < h; ++y) {
-        if (rowEdges <= capacity - edgeCount && folds) {
-            while (cleared < edgeCount + rowEdges) clearAhead();
+        if (rowEdges <= capacity - edgeCount() && folds) {
+            while (cleared < edgeCount() + rowEdges) clearAhead();
             addRow(y, std::false_type{});
         } else {
             addRow(y, std::true_type{});
         }
     }
 
-    ws.edgeCount = edgeCount;
+    ws.edgeCount = edgeCount();
 
     // The incidence lists (CSR), each region's degree and then its next
     // list position counted in a compact array in the scratch
@@ -352,10 +372,11 @@ void buildGraph(DecoderWorkspace& ws)
     Region* regions = ws.regions.get();
     const int regionCount = ws.regionCount;
     std::int32_t* adjacency = ws.adjacency.get();
+    const std::int32_t edgeTotal = ws.edgeCount;
     std::int32_t* next = ws.scratch.get() + 2 * static_cast<std::ptrdiff_t>(ws.maxEdges) + 2;
     std::fill(next, next + regionCount, 0);
     bool saturating = false;
-    for (int e = 0; e < edgeCount; ++e) {
+    for (int e = 0; e < edgeTotal; ++e) {
         const std::int32_t a = edges[e].a, b = edges[e].b;
         edges[e].normalY = static_cast<std::int16_t>(edges[e].normalY + (edges[e].normalX < 0));  // addPair's borrow
         saturating |= edges[e].borderCount >= kSaturatingCount;
@@ -371,7 +392,7 @@ void buildGraph(DecoderWorkspace& ws)
         next[r] = offset;
         offset += degree;
     }
-    for (int e = 0; e < edgeCount; ++e) {
+    for (int e = 0; e < edgeTotal; ++e) {
         adjacency[next[edges[e].a]++] = e;
         adjacency[next[edges[e].b]++] = e;
     }
