@@ -19,10 +19,12 @@
 namespace stria::pipeline::graph_kernels {
 
 // A pair's terms from its channel differences gx, gy (one of them to be
-// quartered, below): along = |gx xAlong + gy yAlong| and across = |gx xAcross
-// + gy yAcross|, per channel, summed over the channels as pairGradient does.
-// plainWeights gives pairGradient's own products (gx px + gy py and -gx py +
-// gy px; -gx py is gx (-py), the same float), on the quartered difference.
+// quartered, below), per channel, summed over the channels as pairGradient
+// does: along = |gx xAlong - gy yAlong| and across = |gy yAcross - gx
+// xAcross|. plainWeights gives pairGradient's own floats: its gx px + gy py
+// is gx px - gy (-py) and its -gx py + gy px is gy px - gx py (negation is
+// exact, and a + (-b) is a - b), as differences so that NEON takes each
+// absolute difference in one instruction (fabd).
 //
 // The folded weights take the 0.25 into the weights of the quartered
 // component instead (horizontal pairs: gy's, vertical ones: gx's), a
@@ -35,15 +37,15 @@ struct PairWeights {
 };
 inline PairWeights plainWeights(const cv::Vec2f& primary)
 {
-    return {primary[0], primary[1], -primary[1], primary[0]};
+    return {primary[0], -primary[1], primary[1], primary[0]};
 }
 inline PairWeights horizontalFoldedWeights(const cv::Vec2f& primary)
 {
-    return {primary[0], 0.25f * primary[1], -primary[1], 0.25f * primary[0]};
+    return {primary[0], -0.25f * primary[1], primary[1], 0.25f * primary[0]};
 }
 inline PairWeights verticalFoldedWeights(const cv::Vec2f& primary)
 {
-    return {0.25f * primary[0], primary[1], -0.25f * primary[1], primary[0]};
+    return {0.25f * primary[0], -primary[1], 0.25f * primary[1], primary[0]};
 }
 inline bool quarterFolds(const cv::Vec2f& primary)
 {
@@ -65,8 +67,8 @@ inline Floats firstPixel(Int16s v) { return vcvtq_f32_s32(vmovl_s16(vget_low_s16
 inline Floats quarter(Floats v) { return vmulq_n_f32(v, 0.25f); }
 inline PairGradient pairTerms(Floats gx, Floats gy, const PairWeights& w)
 {
-    const Floats along = vabsq_f32(vaddq_f32(vmulq_n_f32(gx, w.xAlong), vmulq_n_f32(gy, w.yAlong)));
-    const Floats across = vabsq_f32(vaddq_f32(vmulq_n_f32(gx, w.xAcross), vmulq_n_f32(gy, w.yAcross)));
+    const Floats along = vabdq_f32(vmulq_n_f32(gx, w.xAlong), vmulq_n_f32(gy, w.yAlong));
+    const Floats across = vabdq_f32(vmulq_n_f32(gy, w.yAcross), vmulq_n_f32(gx, w.xAcross));
     // The reference's sums, channel by channel (0 + a = a for a >= +0).
     return {(vgetq_lane_f32(along, 0) + vgetq_lane_f32(along, 1)) + vgetq_lane_f32(along, 2),
             (vgetq_lane_f32(across, 0) + vgetq_lane_f32(across, 1)) + vgetq_lane_f32(across, 2)};
@@ -87,11 +89,13 @@ inline PairGradient pairTerms(Floats gx, Floats gy, const PairWeights& w)
 {
     // |v| as v & 0x7fffffff (andps takes its operands in either order, andnps
     // needed a copy of the sign mask): fewer instructions, the same bits.
-    const __m128 xAlong = _mm_set1_ps(w.xAlong), yAlong = _mm_set1_ps(w.yAlong);
-    const __m128 xAcross = _mm_set1_ps(w.xAcross), yAcross = _mm_set1_ps(w.yAcross);
+    // The differences as sums with a negated weight (addps takes its
+    // operands in either order, subps needed copies: the same floats).
+    const __m128 xAlong = _mm_set1_ps(w.xAlong), minusYAlong = _mm_set1_ps(-w.yAlong);
+    const __m128 minusXAcross = _mm_set1_ps(-w.xAcross), yAcross = _mm_set1_ps(w.yAcross);
     const __m128 magnitude = _mm_castsi128_ps(_mm_set1_epi32(0x7fffffff));
-    const __m128 along = _mm_and_ps(_mm_add_ps(_mm_mul_ps(gx, xAlong), _mm_mul_ps(gy, yAlong)), magnitude);
-    const __m128 across = _mm_and_ps(_mm_add_ps(_mm_mul_ps(gx, xAcross), _mm_mul_ps(gy, yAcross)), magnitude);
+    const __m128 along = _mm_and_ps(_mm_add_ps(_mm_mul_ps(gx, xAlong), _mm_mul_ps(gy, minusYAlong)), magnitude);
+    const __m128 across = _mm_and_ps(_mm_add_ps(_mm_mul_ps(gx, minusXAcross), _mm_mul_ps(gy, yAcross)), magnitude);
     // {along0, across0, along1, across1} + {along1, across1, ..}, then
     // + {along2, across2, ..}: the reference's sums, channel by channel
     // (0 + a = a for a >= +0). The upper half by pshufd, which needs no copy.
@@ -122,8 +126,8 @@ inline PairGradient horizontalPair(const std::uint8_t* up, const std::uint8_t* r
         const float gx = static_cast<float>(row[i + 3 + c] - row[i + c]);
         const float sy = static_cast<float>(down[i + c] - up[i + c] + down[i + 3 + c] - up[i + 3 + c]);
         const float gy = kFolded ? sy : 0.25f * sy;
-        out.primary += std::abs(gx * w.xAlong + gy * w.yAlong);
-        out.secondary += std::abs(gx * w.xAcross + gy * w.yAcross);
+        out.primary += std::abs(gx * w.xAlong - gy * w.yAlong);
+        out.secondary += std::abs(gy * w.yAcross - gx * w.xAcross);
     }
     return out;
 #endif
@@ -147,8 +151,8 @@ inline PairGradient verticalPair(const std::uint8_t* row, const std::uint8_t* be
         const float sx =
             static_cast<float>(row[i + 3 + c] - row[i - 3 + c] + below[i + 3 + c] - below[i - 3 + c]);
         const float gx = kFolded ? sx : 0.25f * sx;
-        out.primary += std::abs(gx * w.xAlong + gy * w.yAlong);
-        out.secondary += std::abs(gx * w.xAcross + gy * w.yAcross);
+        out.primary += std::abs(gx * w.xAlong - gy * w.yAlong);
+        out.secondary += std::abs(gy * w.yAcross - gx * w.xAcross);
     }
     return out;
 #endif
