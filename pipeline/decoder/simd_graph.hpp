@@ -144,9 +144,9 @@ inline PairGradient verticalPair(const std::uint8_t* row, const std::uint8_t* be
 {
     const std::size_t i = 3 * x;
 #if defined(__ARM_NEON) || defined(__SSE2__)
+    // The two rows' sums first (exact in int16): one shift of a pixel less.
     const Int16s here = bytes8(row + i), hereBelow = bytes8(below + i);
-    const Int16s across =
-        plus(minus(nextPixel(here), bytes8(row + i - 3)), minus(nextPixel(hereBelow), bytes8(below + i - 3)));
+    const Int16s across = minus(nextPixel(plus(here, hereBelow)), plus(bytes8(row + i - 3), bytes8(below + i - 3)));
     const Floats gx = firstPixel(across);
     return pairTerms(kFolded ? gx : quarter(gx), firstPixel(minus(hereBelow, here)), w);
 #else
