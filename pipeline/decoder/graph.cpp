@@ -350,7 +350,8 @@ void buildGraph(DecoderWorkspace& ws)
     };
     // A row has fewer than 2 w pairs, so fewer new edges: where the capacity
     // leaves room for them, the records for them are cleared and the row
-    // takes the unchecked look-ups; else (only near the capacity) the checked ones.
+    // takes the unchecked look-ups (and the folded weights); else (only near
+    // the capacity, or for a direction that does not fold) the checked ones.
     const std::int32_t rowEdges = 2 * w;
     for (int y = 0; y < h; ++y) {
         if (rowEdges <= capacity - edgeCount() && folds) {
