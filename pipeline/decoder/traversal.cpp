@@ -581,59 +581,44 @@ private:
         int linkCount = 0;
         // The edges that can weigh are listed first, without a branch (which
         // regions are decoded is data), in the seed order's buffer (free
-        // after the seeds): across the stripes those with a decoded end, in
-        // edge order (the links' order) from the front, along them those
-        // between regions of different stripes from the back (their
-        // scores are sums: the order does not matter). The two lists hold
-        // at most edgeCount entries; where they meet, both write e.
-        std::int32_t* across = ws_.edgeOrder.get();
-        std::int32_t* along = across + ws_.maxEdges - 1;  // along[-i]
-        int acrossCount = 0, alongCount = 0;
+        // after the seeds): across the stripes those with both ends decoded,
+        // in edge order (the links' order), from the front; from the back
+        // the rest, whose scores are sums (the order does not matter):
+        // across the stripes those with one end decoded, along them those
+        // between regions of different stripes (few: the branch between
+        // the two is predictable). The two lists hold at most edgeCount
+        // entries; where they meet, both write e. (One list, with a branch
+        // per edge on which ends are decoded, and the link by selects GCC
+        // made a branch: 6.6 k more mispredictions per 780x580 decode.)
+        std::int32_t* both = ws_.edgeOrder.get();
+        std::int32_t* rest = both + ws_.maxEdges - 1;  // rest[-i]
+        int bothCount = 0, restCount = 0;
         for (int e = 0; e < ws_.edgeCount; ++e) {
             const GraphEdge& edge = ws_.edges[e];
             const int sa = stripes_[edge.a], sb = stripes_[edge.b];
             const bool parallel = features_[e].direction() == EdgeDirection::Parallel;
-            across[acrossCount] = e;
-            acrossCount += !parallel & ((sa & sb) >= 0);
-            along[-alongCount] = e;
-            alongCount += parallel & ((sa | sb) >= 0) & (sa != sb);
+            const bool anyDecoded = (sa & sb) >= 0, allDecoded = (sa | sb) >= 0;
+            both[bothCount] = e;
+            bothCount += !parallel & allDecoded;
+            rest[-restCount] = e;
+            restCount += (!parallel & anyDecoded & !allDecoded) | (parallel & allDecoded & (sa != sb));
         }
-        // Along the stripes the stripe stays: a weak edge to a region
-        // decoded as another stripe contradicts one of them.
-        for (int i = 0; i < alongCount; ++i) {
-            const int e = along[-i];
+        for (int i = 0; i < restCount; ++i) {
+            const int e = rest[-i];
             const GraphEdge& edge = ws_.edges[e];
-            const EdgeFeature& feature = features_[e];
-            if (feature.weight < weakEdge(edge.a)) score[edge.a] += kAlongStripeWeight * edge.borderCount;
-            if (feature.weight < weakEdge(edge.b)) score[edge.b] += kAlongStripeWeight * edge.borderCount;
-        }
-        for (int i = 0; i < acrossCount; ++i) {
-            const int e = across[i];
-            const GraphEdge& edge = ws_.edges[e];
-            const int sa = stripes_[edge.a], sb = stripes_[edge.b];
             const EdgeFeature& feature = features_[e];
             const EdgeDirection direction = feature.direction();
             const int border = edge.borderCount;
-            const int step = static_cast<int>(direction);  // b = a + step if consecutive
-            if (sa >= 0 && sb >= 0) {
-                if (sa == sb) {  // a null edge within the stripe
-                    pairs[2 * linkCount] = step > 0 ? edge.a : edge.b;
-                    pairs[2 * linkCount + 1] = 2 * (step > 0 ? edge.b : edge.a);
-                    ++linkCount;
-                } else if (sb == sa + step &&
-                           edgeError(edge.a, edge.b, feature, stripeSymbol(pattern, sa, sb), nullptr) < limit) {
-                    pairs[2 * linkCount] = step > 0 ? edge.a : edge.b;
-                    pairs[2 * linkCount + 1] = 2 * (step > 0 ? edge.b : edge.a) + 1;
-                    ++linkCount;
-                    score[edge.a] -= kContradictionRatio * border;
-                    score[edge.b] -= kContradictionRatio * border;
-                } else {
-                    score[edge.a] += border;
-                    score[edge.b] += border;
-                }
+            if (direction == EdgeDirection::Parallel) {
+                // Along the stripes the stripe stays: a weak edge to a region
+                // decoded as another stripe contradicts one of them.
+                if (feature.weight < weakEdge(edge.a)) score[edge.a] += kAlongStripeWeight * border;
+                if (feature.weight < weakEdge(edge.b)) score[edge.b] += kAlongStripeWeight * border;
                 continue;
             }
             // One end decoded: does the edge show the symbol to the next stripe?
+            const int sa = stripes_[edge.a], sb = stripes_[edge.b];
+            const int step = static_cast<int>(direction);  // b = a + step if consecutive
             const bool fromA = sa >= 0;
             const int v = fromA ? edge.a : edge.b, w = fromA ? edge.b : edge.a;
             const int stripe = fromA ? sa : sb, expected = stripe + (fromA ? step : -step);
@@ -642,6 +627,32 @@ private:
                 score[v] -= kContradictionRatio * border;
             else if (feature.weight >= weakEdge(v))
                 score[v] += border;
+        }
+        // Both ends decoded: a link if the stripe is the same (a null edge
+        // within the stripe, not confirmed) or the next one in the edge's
+        // direction with a fitting symbol (confirmed, a confirming border);
+        // else a contradicting border. The link is written for every edge,
+        // counted where it is one; the score's change is selected.
+        for (int i = 0; i < bothCount; ++i) {
+            const int e = both[i];
+            const GraphEdge& edge = ws_.edges[e];
+            const int sa = stripes_[edge.a], sb = stripes_[edge.b];
+            const EdgeFeature& feature = features_[e];
+            const int border = edge.borderCount;
+            const int step = static_cast<int>(feature.direction());  // b = a + step if consecutive
+            const bool same = sa == sb;
+            const bool fits = sb == sa + step &&
+                              edgeError(edge.a, edge.b, feature, stripeSymbol(pattern, sa, sb), nullptr) < limit;
+            // (left, right) = (a, b) forward, (b, a) backward, by masks: GCC
+            // made the selects a branch (~3.8 k mispredictions per decode).
+            const int flip = (edge.a ^ edge.b) & -static_cast<int>(step < 0);
+            const int left = edge.a ^ flip, right = edge.b ^ flip;
+            pairs[2 * linkCount] = left;
+            pairs[2 * linkCount + 1] = 2 * right + fits;
+            linkCount += same | fits;
+            const int change = fits ? -kContradictionRatio * border : same ? 0 : border;
+            score[edge.a] += change;
+            score[edge.b] += change;
         }
         return linkCount;
     }
