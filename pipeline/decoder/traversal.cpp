@@ -179,18 +179,24 @@ private:
         static_assert(sizeof(OpenEntry) >= 2 * sizeof(SeedKey) + 4);
         SeedKey* keys = reinterpret_cast<SeedKey*>(ws_.scratch.get());
         SeedKey* other = reinterpret_cast<SeedKey*>(ws_.open.get());
+        // The three digits' counts in the pass that makes the keys (counts
+        // do not depend on the order, so the passes need not count again).
+        constexpr int kPasses = (32 + kRadixBits - 1) / kRadixBits;
+        auto digit = [](const SeedKey& key, int pass) {
+            return (key.value >> (32 + pass * kRadixBits)) & ((1u << kRadixBits) - 1);
+        };
+        std::array<std::array<std::int32_t, 1 << kRadixBits>, kPasses> starts{};
         for (int i = 0; i < count; ++i) {
             const int e = ws_.edgeOrder[i];
             keys[i].value = orderKey(bestError(features_[e]), e);
+            for (int pass = 0; pass < kPasses; ++pass) ++starts[pass][digit(keys[i], pass)];
         }
-        for (int shift = 32; shift < 64; shift += kRadixBits) {
-            std::array<std::int32_t, 1 << kRadixBits> start{};
-            auto digit = [shift](const SeedKey& key) { return (key.value >> shift) & ((1u << kRadixBits) - 1); };
-            for (int i = 0; i < count; ++i) ++start[digit(keys[i])];
-            if (count > 0 && start[digit(keys[0])] == count) continue;  // one digit: the order stays
+        for (int pass = 0; pass < kPasses; ++pass) {
+            std::array<std::int32_t, 1 << kRadixBits>& start = starts[pass];
+            if (count > 0 && start[digit(keys[0], pass)] == count) continue;  // one digit: the order stays
             std::int32_t sum = 0;
             for (std::int32_t& s : start) sum += std::exchange(s, sum);
-            for (int i = 0; i < count; ++i) other[start[digit(keys[i])]++] = keys[i];
+            for (int i = 0; i < count; ++i) other[start[digit(keys[i], pass)]++] = keys[i];
             std::swap(keys, other);
         }
         for (int i = 0; i < count; ++i) ws_.edgeOrder[i] = static_cast<std::int32_t>(keys[i].value & 0xffffffffu);
