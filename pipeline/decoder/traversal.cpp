@@ -588,11 +588,15 @@ private:
             const OpenEntry entry = popOpen();
             const int region = static_cast<std::int32_t>(entry.order & 0xffffffffu);
             Region& r = ws_.regions[region];
-            if (r.stripe == entry.stripe) {
+            // The stripe from the compact copy (equal to the record's): the
+            // branches wait on it, not on the record, which misses the cache
+            // for about half the pops (780x580: 3.9 k of 7 k per decode).
+            const int stripe = stripes_[region];
+            if (stripe == entry.stripe) {
                 r.positionError = std::min(r.positionError, entry.positionError);
                 continue;
             }
-            if (r.stripe >= 0 && r.positionError <= entry.positionError) continue;
+            if (stripe >= 0 && r.positionError <= entry.positionError) continue;
             r.stripe = stripes_[region] = entry.stripe;
             r.positionError = entry.positionError;
             r.reference = entry.reference;
