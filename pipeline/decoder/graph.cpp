@@ -160,8 +160,8 @@ std::size_t graphScratchEntries(std::size_t regions, std::size_t edges)
 {
     // 2 entries per edge and 2 more (the traversal's share; the graph's
     // label pairs are in its edge records), then the graph's counter per
-    // region.
-    return regions + 2 * edges + 2;
+    // region; the traversal's stripes and components per region there.
+    return 2 * regions + 2 * edges + 2;
 }
 
 std::size_t graphTableEntries(std::size_t regions, std::size_t edges)

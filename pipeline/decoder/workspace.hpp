@@ -119,8 +119,8 @@ struct DecoderWorkspace {
     // tests read instead of computing it again (orderEntries >= 4 maxEdges).
     struct EdgeChange* edgeChanges = nullptr;
     // Gradient row lanes, watershed descent codes, region sums, the graph
-    // edges' label pairs, then the traversal's seed sort keys and links, then the depth
-    // stage's region stripes.
+    // edges' label pairs, then the traversal's seed sort keys and links and its
+    // regions' stripes and components, then the depth stage's region stripes.
     std::unique_ptr<std::int32_t[]> scratch;
 
     // Graph.
