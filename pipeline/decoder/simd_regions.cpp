@@ -28,10 +28,6 @@ std::array<std::uint8_t, 3> channelMediansReference(const std::uint32_t* pixels,
 #if defined(__ARM_NEON) || defined(__SSE2__)
 namespace {
 
-// From byte 16 - k on: k lanes of 0xff, then zeros.
-alignas(16) constexpr std::uint8_t kLeadingLanes[32] = {255, 255, 255, 255, 255, 255, 255, 255,
-                                                       255, 255, 255, 255, 255, 255, 255, 255};
-
 // The median m = values sorted[count / 2] is the largest t with at most
 // count / 2 values below t: found bit by bit from the top, each step one
 // counting pass over the pixels (4 pixels' 3 channels per compare, no
@@ -45,10 +41,12 @@ alignas(16) constexpr std::uint8_t kLeadingLanes[32] = {255, 255, 255, 255, 255,
 // dependent subtractions (1 cycle each) was the bound, not the compares
 // (780x580 medians 0.66 -> 0.48 ms, 1388x1038 1.70 -> 1.28 ms).
 
-// Calls step(b) for b = blocks - 1 down to 0, 0 <= blocks <= 64, by a jump into
+// Calls step(b) for b = blocks - 1 down to 0, 1 <= blocks <= 64, by a jump into
 // straight-line code (Duff's device): the 8 passes over a region take the
 // same jump, which is predicted after the first, where a loop's exit was
-// mispredicted in most passes.
+// mispredicted in most passes. The switch is on blocks & 63 (64 as 0): its
+// 64 cases cover every value, so GCC's jump has no bounds check (780x580
+// medians of four -0.1 M instructions per decode).
 template <class Step>
 [[gnu::always_inline]] inline void forBlocksDown(int blocks, Step step)
 {
@@ -59,22 +57,32 @@ template <class Step>
 #define STRIA_BLOCKS8(b) \
     STRIA_BLOCK(b + 7)   \
     STRIA_BLOCK(b + 6) STRIA_BLOCK(b + 5) STRIA_BLOCK(b + 4) STRIA_BLOCK(b + 3) STRIA_BLOCK(b + 2) STRIA_BLOCK(b + 1) STRIA_BLOCK(b)
-    switch (blocks) {
-        STRIA_BLOCKS8(57)
+    switch (static_cast<unsigned>(blocks) & 63) {
+    case 0:  // 64
+        step(63);
+        [[fallthrough]];
+        STRIA_BLOCK(63)
+        STRIA_BLOCK(62)
+        STRIA_BLOCK(61)
+        STRIA_BLOCK(60)
+        STRIA_BLOCK(59)
+        STRIA_BLOCK(58)
+        STRIA_BLOCK(57)
         STRIA_BLOCKS8(49)
         STRIA_BLOCKS8(41)
         STRIA_BLOCKS8(33)
         STRIA_BLOCKS8(25)
         STRIA_BLOCKS8(17)
         STRIA_BLOCKS8(9)
-        STRIA_BLOCKS8(1)
-    case 0:
-        break;
-    default:
-        // Never (blocks <= 64): GCC's code around the jump is shorter
-        // than with a default case to jump to (780x580 medians of four
-        // 3.85 -> 3.49 M instructions per decode; the bounds check stays).
-        __builtin_unreachable();
+        STRIA_BLOCK(8)
+        STRIA_BLOCK(7)
+        STRIA_BLOCK(6)
+        STRIA_BLOCK(5)
+        STRIA_BLOCK(4)
+        STRIA_BLOCK(3)
+        STRIA_BLOCK(2)
+    case 1:
+        step(0);
     }
 #undef STRIA_BLOCKS8
 #undef STRIA_BLOCK
@@ -86,7 +94,6 @@ inline Bytes loadBytes(const std::uint8_t* p) { return vld1q_u8(p); }
 inline Bytes zeroBytes() { return vdupq_n_u8(0); }
 inline Bytes add(Bytes a, Bytes b) { return vaddq_u8(a, b); }
 inline Bytes sub(Bytes a, Bytes b) { return vsubq_u8(a, b); }
-inline Bytes bitAnd(Bytes a, Bytes b) { return vandq_u8(a, b); }
 // All ones in the lanes of x at least the limit's t: x > t - 1 as signed
 // bytes (x = value ^ 0x80, the limit is (t - 1) ^ 0x80 = t + 0x7f).
 inline Bytes atLeast(const std::uint8_t* x, Bytes limit)
@@ -107,7 +114,7 @@ inline std::array<int, 3> pixelSums(Bytes counts)
 struct ByteSearch {
     const std::uint8_t* bytes;
     int blocks;
-    Bytes restLanes, need, m;
+    Bytes need, m;
 };
 inline Bytes firstBit() { return vdupq_n_u8(128); }
 inline Bytes nextBit(Bytes bit) { return vshrq_n_u8(bit, 1); }
@@ -152,7 +159,6 @@ inline Bytes loadBytes(const std::uint8_t* p) { return _mm_loadu_si128(reinterpr
 inline Bytes zeroBytes() { return _mm_setzero_si128(); }
 inline Bytes add(Bytes a, Bytes b) { return _mm_add_epi8(a, b); }
 inline Bytes sub(Bytes a, Bytes b) { return _mm_sub_epi8(a, b); }
-inline Bytes bitAnd(Bytes a, Bytes b) { return _mm_and_si128(a, b); }
 // All ones in the lanes of x at least the limit's t: x > t - 1 as signed
 // bytes (x = value ^ 0x80, the limit is (t - 1) ^ 0x80 = t + 0x7f). SSE2 has
 // no unsigned byte comparison: max(x, t - 1) == t - 1 on the values took one
@@ -170,7 +176,7 @@ inline std::array<int, 3> pixelSums(Bytes counts)
 struct ByteSearch {
     const std::uint8_t* bytes;
     int blocks;
-    Bytes restLanes, need, m;
+    Bytes need, m;
 };
 inline Bytes firstBit() { return _mm_set1_epi8(static_cast<char>(128)); }
 // bit >> 1 in 16-bit lanes: no bit crosses into the next byte.
@@ -220,13 +226,6 @@ inline std::uint32_t dword(Bytes v, int j)
 }
 #endif
 
-// The pixels as whole blocks of 4 and the lanes of the next block that hold
-// the rest (the block after the last is read even where none do).
-inline Bytes restLanesOf(int count)
-{
-    return loadBytes(kLeadingLanes + 16 - 4 * (static_cast<unsigned>(count) % 4));
-}
-
 inline ByteSearch startSearch(const std::uint32_t* pixels, int count)
 {
     // At most count / 2 below t: at least count - count / 2 from t on.
@@ -235,15 +234,16 @@ inline ByteSearch startSearch(const std::uint32_t* pixels, int count)
 #else
     const Bytes need = _mm_set1_epi8(static_cast<char>(count - count / 2));
 #endif
-    return {reinterpret_cast<const std::uint8_t*>(pixels), static_cast<int>(static_cast<unsigned>(count) / 4),
-            restLanesOf(count), need, zeroBytes()};
+    return {reinterpret_cast<const std::uint8_t*>(pixels), static_cast<int>((static_cast<unsigned>(count) + 3) / 4),
+            need, zeroBytes()};
 }
 
 // The counts of a search's pixels from limit on (per byte position of the
-// 4 pixels of a block).
+// 4 pixels of a block; the block after the pixels' whole blocks is counted
+// whole: its entries past the last pixel hold the value 0, below every limit).
 [[gnu::always_inline]] inline Bytes passCounts(const ByteSearch& s, Bytes limit)
 {
-    Bytes even = sub(zeroBytes(), bitAnd(atLeast(s.bytes + 16 * s.blocks, limit), s.restLanes)), odd = zeroBytes();
+    Bytes even = zeroBytes(), odd = zeroBytes();
     forBlocksDown(s.blocks, [&](int b) {
         Bytes& counts = b & 1 ? odd : even;
         counts = sub(counts, atLeast(s.bytes + 16 * b, limit));
@@ -257,21 +257,20 @@ inline ByteSearch startSearch(const std::uint32_t* pixels, int count)
     searchStep(s, bit, passCounts(s, searchLimit(s, bit)));
 }
 
-// Per byte k < 3 of the pixels (blocks whole blocks of 4, then the lanes of
-// the next block in restLanes), how many are at least t[k] (1 <= t[k] <= 255).
-// blocks <= 254: the per-lane byte counters cannot overflow.
-inline std::array<int, 3> countAtLeast(const std::uint8_t* bytes, int blocks, Bytes restLanes, const std::array<int, 3>& t)
+// Per byte k < 3 of the pixels (blocks of 4, the last padded with the value
+// 0), how many are at least t[k] (1 <= t[k] <= 255).
+// 1 <= blocks <= 254: the per-lane byte counters cannot overflow.
+inline std::array<int, 3> countAtLeast(const std::uint8_t* bytes, int blocks, const std::array<int, 3>& t)
 {
     const Bytes limit = limitOf(static_cast<std::uint32_t>(t[0] | t[1] << 8 | t[2] << 16));
-    Bytes c[4] = {sub(zeroBytes(), bitAnd(atLeast(bytes + 16 * blocks, limit), restLanes)), zeroBytes(), zeroBytes(),
-                  zeroBytes()};
+    Bytes c[4] = {zeroBytes(), zeroBytes(), zeroBytes(), zeroBytes()};
     // Duff's device: a loop of 64 blocks per step, entered by a jump into
     // its body so the first step takes the blocks past whole 64s (the same
     // jump in each pass over a region). A loop of 4 blocks per step, which
     // GCC compiled with a copy of each accumulator per block, took 6.5
     // instructions per block, this 4 (straight-line code without the jump
-    // targets, GCC regrouped the sums and spilled).
-    if (blocks == 0) return pixelSums(c[0]);
+    // targets, GCC regrouped the sums and spilled). The switch is on
+    // first & 63 (64 as 0), whose cases cover every value: no bounds check.
     const int first = ((blocks - 1) & 63) + 1;  // 1..64
     int steps = (blocks + 63) / 64;
     // Byte offset of the step's block 0 (negative in the first step, whose
@@ -279,14 +278,13 @@ inline std::array<int, 3> countAtLeast(const std::uint8_t* bytes, int blocks, By
     std::ptrdiff_t at = 16 * static_cast<std::ptrdiff_t>(first - 64);
 #define STRIA_COUNT(i) c[(i) & 3] = sub(c[(i) & 3], atLeast(bytes + (at + 16 * (i)), limit))
 #define STRIA_BLOCK(i) \
-    case 64 - (i):     \
+    case (64 - (i)) & 63: \
         STRIA_COUNT(i); \
         [[fallthrough]];
 #define STRIA_BLOCKS7(i) \
     STRIA_BLOCK(i) STRIA_BLOCK(i + 1) STRIA_BLOCK(i + 2) STRIA_BLOCK(i + 3) STRIA_BLOCK(i + 4) STRIA_BLOCK(i + 5) STRIA_BLOCK(i + 6)
 #define STRIA_BLOCKS8(i) STRIA_BLOCKS7(i) STRIA_BLOCK(i + 7)
-    switch (first) {
-    default:  // case 64
+    switch (static_cast<unsigned>(first) & 63) {
         do {
             STRIA_BLOCKS8(0)
             STRIA_BLOCKS8(8)
@@ -324,9 +322,8 @@ std::array<std::uint8_t, 3> channelMedians(const std::uint32_t* pixels, int coun
     // blocks (the byte counters' limit), over the chunks in int. (A
     // histogram's increments wait on each other where neighbouring pixels
     // share a value, as in large uniform regions.)
-    const int blocks = count / 4;
+    const int blocks = (count + 3) / 4;
     const auto* bytes = reinterpret_cast<const std::uint8_t*>(pixels);
-    const Bytes restLanes = restLanesOf(count), noLanes = loadBytes(kLeadingLanes + 16);
     std::array<int, 3> m{};
     for (int bit = 128; bit > 0; bit >>= 1) {
         const std::array<int, 3> t{m[0] | bit, m[1] | bit, m[2] | bit};
@@ -334,7 +331,7 @@ std::array<std::uint8_t, 3> channelMedians(const std::uint32_t* pixels, int coun
         for (int first = 0;; first += 254) {
             const int chunk = std::min(254, blocks - first);
             const bool last = first + chunk == blocks;
-            const std::array<int, 3> part = countAtLeast(bytes + 16 * first, chunk, last ? restLanes : noLanes, t);
+            const std::array<int, 3> part = countAtLeast(bytes + 16 * first, chunk, t);
             for (int k = 0; k < 3; ++k) notBelow[k] += part[k];
             if (last) break;
         }
