@@ -41,7 +41,9 @@ constexpr int kRegionGap = 3;
 // The copy pass: each run's pixels, a pixel's 3 bytes and the next one in 4
 // bytes (the frame's last pixel has no next byte: 3 copied), each byte ^
 // 0x80 (channelMedians compares them as signed bytes), to its region's next
-// positions, next[r] (advanced by the run's length).
+// positions, from next[r] (the address of its next entry, as an integer:
+// advanced by the run's length; with an offset into the buffer each run took
+// 2 instructions more).
 //
 // Four pixels of 3 bytes at from (16 bytes read) to 4 bytes each, by one
 // byte shuffle (SSSE3 pshufb in the x86-64-v3 version, tbl on AArch64): 3
@@ -72,7 +74,7 @@ using Bytes16 = std::uint8_t __attribute__((vector_size(16)));
 }
 
 template <bool shuffled>
-[[gnu::always_inline]] inline void copyRuns(const DecoderWorkspace& ws, std::uint32_t* sorted, std::int32_t* next)
+[[gnu::always_inline]] inline void copyRuns(const DecoderWorkspace& ws, std::int64_t* next)
 {
     const int w = ws.width, h = ws.height, words = borderWords(w);
     // Rows whose next row has 25 bytes or more (the whole blocks read up to
@@ -85,8 +87,8 @@ template <bool shuffled>
         std::ptrdiff_t x = 0;
         if (y >= blockRows) {
             auto run = [&](std::ptrdiff_t end) {
-                std::uint32_t* out = sorted + next[row[x]];
-                next[row[x]] += static_cast<std::int32_t>(end - x);
+                auto* out = reinterpret_cast<std::uint32_t*>(next[row[x]]);
+                next[row[x]] = reinterpret_cast<std::int64_t>(out + (end - x));
                 const std::ptrdiff_t whole = y + 1 == h && end == w ? end - 1 : end;
                 const std::uint8_t* pixel = pixels + 3 * x;
                 auto copy = [&](int bytes) {
@@ -105,8 +107,8 @@ template <bool shuffled>
         }
         auto run = [&](std::ptrdiff_t end) {
             const std::ptrdiff_t r = row[x], length = end - x;
-            std::uint32_t* out = sorted + next[r];
-            next[r] += static_cast<std::int32_t>(length);
+            auto* out = reinterpret_cast<std::uint32_t*>(next[r]);
+            next[r] = reinterpret_cast<std::int64_t>(out + length);
             // The region's next cache line, which one of its next runs will
             // write (a row or two later): the first write to each line was a
             // miss to L3 or memory (the buffer is 4 bytes per pixel).
@@ -148,22 +150,21 @@ template <bool shuffled>
 #if defined(__x86_64__)
 // SSE2 has no byte shuffle: the x86-64-v3 version (picked at run time by
 // GCC's function multiversioning, an ifunc) has SSSE3's.
-[[gnu::target("default")]] void copyRunsVersion(const DecoderWorkspace& ws, std::uint32_t* sorted, std::int32_t* next)
+[[gnu::target("default")]] void copyRunsVersion(const DecoderWorkspace& ws, std::int64_t* next)
 {
-    copyRuns<false>(ws, sorted, next);
+    copyRuns<false>(ws, next);
 }
-[[gnu::target("arch=x86-64-v3")]] void copyRunsVersion(const DecoderWorkspace& ws, std::uint32_t* sorted,
-                                                        std::int32_t* next)
+[[gnu::target("arch=x86-64-v3")]] void copyRunsVersion(const DecoderWorkspace& ws, std::int64_t* next)
 {
-    copyRuns<true>(ws, sorted, next);
+    copyRuns<true>(ws, next);
 }
 #else
-void copyRunsVersion(const DecoderWorkspace& ws, std::uint32_t* sorted, std::int32_t* next)
+void copyRunsVersion(const DecoderWorkspace& ws, std::int64_t* next)
 {
 #if defined(__aarch64__)
-    copyRuns<true>(ws, sorted, next);
+    copyRuns<true>(ws, next);
 #else
-    copyRuns<false>(ws, sorted, next);
+    copyRuns<false>(ws, next);
 #endif
 }
 #endif
@@ -181,8 +182,9 @@ void computeRegions(DecoderWorkspace& ws)
     Region* regions = ws.regions.get();
     for (int r = 0; r < count; ++r) regions[r] = Region{};
     // Compact per-region arrays in the scratch (the Region records are 64
-    // bytes apart): coordinate sums, then a counter, first of pixels and
-    // then the position of the region's next pixel.
+    // bytes apart): coordinate sums (then, in the first of each region's 2
+    // slots, the address of its next pixel in the sorted buffer), then its
+    // pixel counter.
     auto* sums = reinterpret_cast<std::int64_t*>(ws.scratch.get());  // x, y per region
     auto* counter = reinterpret_cast<std::int32_t*>(sums + 2 * static_cast<std::ptrdiff_t>(count));
     std::fill(sums, sums + 2 * static_cast<std::ptrdiff_t>(count), 0);
@@ -207,18 +209,19 @@ void computeRegions(DecoderWorkspace& ws)
         forEachBorder(row, row + 1, w - 1, masks, [&](int last) { run(last + 1); });
         run(w);
     }
-    std::int32_t offset = 0;
+    auto* sorted = reinterpret_cast<std::uint32_t*>(ws.pixelOrder);
+    std::int64_t* next = sums;  // next[r] overwrites sums[r], read at r / 2
+    std::uint32_t* first = sorted;
     for (int r = 0; r < count; ++r) {
         regions[r].pixelCount = counter[r];
         const double size = counter[r];
         regions[r].centroidX = static_cast<float>(static_cast<double>(sums[2 * r] / 2) / size);
         regions[r].centroidY = static_cast<float>(static_cast<double>(sums[2 * r + 1]) / size);
-        counter[r] = offset;
-        offset += regions[r].pixelCount + kRegionGap;
+        next[r] = reinterpret_cast<std::int64_t>(first);
+        first += counter[r] + kRegionGap;
     }
 
-    auto* sorted = reinterpret_cast<std::uint32_t*>(ws.pixelOrder);
-    copyRunsVersion(ws, sorted, counter);
+    copyRunsVersion(ws, next);
 
     // Regions of up to 255 pixels four at a time (channelMediansOfFour
     // overlaps their searches), larger ones alone. They count a region's last
@@ -239,16 +242,17 @@ void computeRegions(DecoderWorkspace& ws)
     int waiting = 0;
     auto pad = [&](int r) {
         constexpr std::uint64_t zeros = 0x8080808080808080u;
-        std::memcpy(sorted + counter[r], &zeros, 8);
-        std::memcpy(sorted + counter[r] + 2, &zeros, 4);
+        auto* end = reinterpret_cast<std::uint32_t*>(next[r]);
+        std::memcpy(end, &zeros, 8);
+        std::memcpy(end + 2, &zeros, 4);
     };
     static_assert(kRegionGap == 3);
     constexpr int kPadAhead = 8;
     for (int r = 0; r < std::min(count, kPadAhead); ++r) pad(r);
     for (int r = 0; r < count; ++r) {
         pad(std::min(r + kPadAhead, count - 1));
-        const int size = regions[r].pixelCount;
-        const std::uint32_t* pixels = sorted + counter[r] - size;
+        const int size = counter[r];
+        const std::uint32_t* pixels = reinterpret_cast<const std::uint32_t*>(next[r]) - size;
         if (size > 255) {
             setColor(r, channelMedians(pixels, size));
         } else {
