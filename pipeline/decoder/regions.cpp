@@ -142,7 +142,10 @@ template <bool shuffled>
             for (int i = 8; i < length; i += 4) block(out + i, i);
             x = end;
         };
-        forEachBit(masks, w - 1, [&](int last) { run(last + 1); });
+        // forEachBit's loop with 64-bit positions (no sign extensions).
+        for (std::ptrdiff_t i0 = 0; i0 < w - 1; i0 += 64, ++masks)
+            for (std::uint64_t bits = *masks; bits; bits &= bits - 1)
+                run(i0 + static_cast<unsigned>(std::countr_zero(bits)) + 1);
         run(w);
     }
 }
