@@ -240,6 +240,25 @@ void computeRegions(DecoderWorkspace& ws)
         const cv::Vec3f corrected = m * median;
         regions[r].color = {corrected[0], corrected[1], corrected[2]};
     };
+    // The same for a group of four, region j in lane j (GCC vector
+    // extensions: SSE2 and NEON): the same floats as setColor, whose product
+    // m * median sums 0 + m(i, 0) v0 + m(i, 1) v1 + m(i, 2) v2 in this order
+    // (780x580 -0.15 M instructions per decode).
+    using Floats = float __attribute__((vector_size(16)));
+    using Ints = std::int32_t __attribute__((vector_size(16)));
+    std::array<std::array<Floats, 3>, 3> mLanes;
+    for (int i = 0; i < 3; ++i)
+        for (int k = 0; k < 3; ++k) mLanes[i][k] = Floats{} + m(i, k);
+    const std::array<int, 3> shifts{8 * ws.rgbOffset[0], 8 * ws.rgbOffset[1], 8 * ws.rgbOffset[2]};
+    auto setColorsOfFour = [&](const std::array<int, 4>& r, const std::array<std::uint32_t, 4>& byDword) {
+        Ints dwords;
+        std::memcpy(&dwords, byDword.data(), sizeof dwords);
+        std::array<Floats, 3> median, corrected;
+        for (int k = 0; k < 3; ++k) median[k] = __builtin_convertvector((dwords >> shifts[k]) & 0xff, Floats);
+        for (int i = 0; i < 3; ++i)
+            corrected[i] = ((Floats{} + mLanes[i][0] * median[0]) + mLanes[i][1] * median[1]) + mLanes[i][2] * median[2];
+        for (int j = 0; j < 4; ++j) regions[r[j]].color = {corrected[0][j], corrected[1][j], corrected[2][j]};
+    };
     std::array<const std::uint32_t*, 4> smallPixels;
     std::array<int, 4> smallCounts, small;  // the regions waiting for a group of 4
     int waiting = 0;
@@ -263,8 +282,7 @@ void computeRegions(DecoderWorkspace& ws)
             smallCounts[waiting] = size;
             small[waiting] = r;
             if (++waiting == 4) {
-                const auto medians = channelMediansOfFour(smallPixels, smallCounts);
-                for (int j = 0; j < 4; ++j) setColor(small[j], medians[j]);
+                setColorsOfFour(small, channelMediansOfFour(smallPixels, smallCounts));
                 waiting = 0;
             }
         }

@@ -110,9 +110,10 @@ void projectedGradientWindows(const std::uint8_t* row, int width, const std::int
 // which is below every value the search compares with (and not counted).
 std::array<std::uint8_t, 3> channelMediansReference(const std::uint32_t* pixels, int count);
 std::array<std::uint8_t, 3> channelMedians(const std::uint32_t* pixels, int count);
-// The same for four regions at once, faster where each has up to 255 pixels.
-std::array<std::array<std::uint8_t, 3>, 4> channelMediansOfFour(const std::array<const std::uint32_t*, 4>& pixels,
-                                                                const std::array<int, 4>& counts);
+// The same for four regions at once, faster where each has up to 255 pixels:
+// region j's medians in bytes 0-2 of dword j (byte 3 zero).
+std::array<std::uint32_t, 4> channelMediansOfFour(const std::array<const std::uint32_t*, 4>& pixels,
+                                                  const std::array<int, 4>& counts);
 
 // Region statistics and graph (regions.cpp, graph.cpp). Bit i of the result
 // is set where a[i] != b[i], for i < count <= 64: with b = a + 1 the borders

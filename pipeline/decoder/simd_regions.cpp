@@ -28,6 +28,8 @@ std::array<std::uint8_t, 3> channelMediansReference(const std::uint32_t* pixels,
 #if defined(__ARM_NEON) || defined(__SSE2__)
 namespace {
 
+alignas(16) constexpr std::uint8_t kThreeBytes[16] = {255, 255, 255, 0, 255, 255, 255, 0, 255, 255, 255, 0, 255, 255, 255, 0};
+
 // The median m = values sorted[count / 2] is the largest t with at most
 // count / 2 values below t: found bit by bit from the top, each step one
 // counting pass over the pixels (4 pixels' 3 channels per compare, no
@@ -94,6 +96,7 @@ inline Bytes loadBytes(const std::uint8_t* p) { return vld1q_u8(p); }
 inline Bytes zeroBytes() { return vdupq_n_u8(0); }
 inline Bytes add(Bytes a, Bytes b) { return vaddq_u8(a, b); }
 inline Bytes sub(Bytes a, Bytes b) { return vsubq_u8(a, b); }
+inline Bytes bitAnd(Bytes a, Bytes b) { return vandq_u8(a, b); }
 // All ones in the lanes of x at least the limit's t: x > t - 1 as signed
 // bytes (x = value ^ 0x80, the limit is (t - 1) ^ 0x80 = t + 0x7f).
 inline Bytes atLeast(const std::uint8_t* x, Bytes limit)
@@ -147,11 +150,11 @@ inline Bytes sumsOfFour(Bytes c0, Bytes c1, Bytes c2, Bytes c3)
     return vaddq_u8(vcombine_u8(vget_low_u8(s0), vget_low_u8(s1)), vcombine_u8(vget_high_u8(s0), vget_high_u8(s1)));
 }
 inline Bytes stepOfFour(Bytes m, Bytes bit, Bytes sums, Bytes need) { return vorrq_u8(m, vandq_u8(bit, vcgeq_u8(sums, need))); }
-inline std::uint32_t dword(Bytes v, int j)
+inline std::array<std::uint32_t, 4> dwords(Bytes v)
 {
     std::array<std::uint32_t, 4> d;
     vst1q_u32(d.data(), vreinterpretq_u32_u8(v));
-    return d[j];
+    return d;
 }
 #else
 using Bytes = __m128i;
@@ -159,6 +162,7 @@ inline Bytes loadBytes(const std::uint8_t* p) { return _mm_loadu_si128(reinterpr
 inline Bytes zeroBytes() { return _mm_setzero_si128(); }
 inline Bytes add(Bytes a, Bytes b) { return _mm_add_epi8(a, b); }
 inline Bytes sub(Bytes a, Bytes b) { return _mm_sub_epi8(a, b); }
+inline Bytes bitAnd(Bytes a, Bytes b) { return _mm_and_si128(a, b); }
 // All ones in the lanes of x at least the limit's t: x > t - 1 as signed
 // bytes (x = value ^ 0x80, the limit is (t - 1) ^ 0x80 = t + 0x7f). SSE2 has
 // no unsigned byte comparison: max(x, t - 1) == t - 1 on the values took one
@@ -218,11 +222,11 @@ inline Bytes stepOfFour(Bytes m, Bytes bit, Bytes sums, Bytes need)
 {
     return _mm_or_si128(m, _mm_and_si128(bit, _mm_cmpeq_epi8(_mm_max_epu8(sums, need), sums)));
 }
-inline std::uint32_t dword(Bytes v, int j)
+inline std::array<std::uint32_t, 4> dwords(Bytes v)
 {
-    alignas(16) std::array<std::uint32_t, 4> d;
-    _mm_store_si128(reinterpret_cast<__m128i*>(d.data()), v);
-    return d[j];
+    std::array<std::uint32_t, 4> d;
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(d.data()), v);
+    return d;
 }
 #endif
 
@@ -344,10 +348,9 @@ std::array<std::uint8_t, 3> channelMedians(const std::uint32_t* pixels, int coun
 #endif
 }
 
-std::array<std::array<std::uint8_t, 3>, 4> channelMediansOfFour(const std::array<const std::uint32_t*, 4>& pixels,
-                                                                const std::array<int, 4>& counts)
+std::array<std::uint32_t, 4> channelMediansOfFour(const std::array<const std::uint32_t*, 4>& pixels,
+                                                  const std::array<int, 4>& counts)
 {
-    std::array<std::array<std::uint8_t, 3>, 4> medians;
 #if defined(__ARM_NEON) || defined(__SSE2__)
     if (std::max({counts[0], counts[1], counts[2], counts[3]}) <= 255) {
         // Each pass ends in a chain of dependent steps (the sums over the
@@ -376,15 +379,15 @@ std::array<std::array<std::uint8_t, 3>, 4> channelMediansOfFour(const std::array
             const Bytes c3 = passCounts(searches[3], dwordOf<3>(limits));
             m = stepOfFour(m, bit, sumsOfFour(c0, c1, c2, c3), need);
         }
-        for (int j = 0; j < 4; ++j) {
-            const std::uint32_t v = dword(m, j);
-            medians[j] = {static_cast<std::uint8_t>(v), static_cast<std::uint8_t>(v >> 8),
-                          static_cast<std::uint8_t>(v >> 16)};
-        }
-        return medians;
+        // Byte 3 of each dword: the search's junk, cleared.
+        return dwords(bitAnd(m, loadBytes(kThreeBytes)));
     }
 #endif
-    for (int j = 0; j < 4; ++j) medians[j] = channelMedians(pixels[j], counts[j]);
+    std::array<std::uint32_t, 4> medians;
+    for (int j = 0; j < 4; ++j) {
+        const std::array<std::uint8_t, 3> v = channelMedians(pixels[j], counts[j]);
+        medians[j] = v[0] | v[1] << 8 | v[2] << 16;
+    }
     return medians;
 }
 

@@ -166,7 +166,10 @@ int regionMediansDiffering(unsigned seed)
         for (std::uint32_t& p : other) p = rng();
         for (int j = 1; j < 4; ++j) pad(other.data() + 258 * (j - 1) + counts[j]);
         const auto medians = channelMediansOfFour(regions, counts);
-        for (int j = 0; j < 4; ++j) differing += medians[j] != channelMediansReference(regions[j], counts[j]);
+        for (int j = 0; j < 4; ++j) {
+            const std::array<std::uint8_t, 3> v = channelMediansReference(regions[j], counts[j]);
+            differing += medians[j] != static_cast<std::uint32_t>(v[0] | v[1] << 8 | v[2] << 16);
+        }
     };
     for (int count : {1, 2, 3, 4, 5, 63, 64, 65, 252, 255, 256, 257, 511, 512, 516, 771, 1016, 1019, 1020, 3000})
         for (int kind = 0; kind < 3; ++kind) {
