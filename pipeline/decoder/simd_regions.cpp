@@ -158,12 +158,17 @@ inline std::array<std::uint32_t, 4> dwords(Bytes v)
 // One region of up to 1020 pixels: the bytewise sums over a pass's 4 pixels
 // per block in 16 bits (lanes 0-2; need in lanes 0-2, lane 3 never reached),
 // the bits reached set in each dword of m.
+// (Up to 32767 pixels with wordSums added over chunks of 255 blocks.)
 using Words = uint16x4_t;
-inline Words wordsNeed(int need) { return vreinterpret_u16_u64(vdup_n_u64(0xffff000000000000u | 0x100010001u * static_cast<std::uint64_t>(need))); }
-inline Bytes stepOfWords(Bytes m, Bytes bit, Bytes counts, Words need)
+inline Words addWords(Words a, Words b) { return vadd_u16(a, b); }
+inline Words wordSums(Bytes counts)
 {
     const uint16x8_t pairs = vaddl_u8(vget_low_u8(counts), vget_high_u8(counts));
-    const uint16x4_t sums = vadd_u16(vget_low_u16(pairs), vget_high_u16(pairs));
+    return vadd_u16(vget_low_u16(pairs), vget_high_u16(pairs));
+}
+inline Words wordsNeed(int need) { return vreinterpret_u16_u64(vdup_n_u64(0xffff000000000000u | 0x100010001u * static_cast<std::uint64_t>(need))); }
+inline Bytes stepOfWords(Bytes m, Bytes bit, Words sums, Words need)
+{
     const uint8x8_t reached = vmovn_u16(vcombine_u16(vcge_u16(sums, need), vcge_u16(sums, need)));
     return vorrq_u8(m, vandq_u8(bit, vcombine_u8(reached, reached)));
 }
@@ -242,17 +247,23 @@ inline std::array<std::uint32_t, 4> dwords(Bytes v)
 // One region of up to 1020 pixels: the bytewise sums over a pass's 4 pixels
 // per block in 16 bits (lanes 0-2; need - 1 in lanes 0-2, lane 3 and on never
 // reached), the bits reached set in each dword of m.
+// (Up to 32767 pixels with wordSums added over chunks of 255 blocks: signed
+// compares.)
 using Words = __m128i;
+inline Words addWords(Words a, Words b) { return _mm_add_epi16(a, b); }
+inline Words wordSums(Bytes counts)
+{
+    const __m128i zero = _mm_setzero_si128();
+    const __m128i sums = _mm_add_epi16(_mm_unpacklo_epi8(counts, zero), _mm_unpackhi_epi8(counts, zero));
+    return _mm_add_epi16(sums, _mm_srli_si128(sums, 8));  // lanes 0-3: the 4 dwords' sums
+}
 inline Words wordsNeed(int need)
 {
     return _mm_setr_epi16(static_cast<short>(need - 1), static_cast<short>(need - 1), static_cast<short>(need - 1), 0x7fff,
                           0x7fff, 0x7fff, 0x7fff, 0x7fff);
 }
-inline Bytes stepOfWords(Bytes m, Bytes bit, Bytes counts, Words needLess1)
+inline Bytes stepOfWords(Bytes m, Bytes bit, Words sums, Words needLess1)
 {
-    const __m128i zero = _mm_setzero_si128();
-    __m128i sums = _mm_add_epi16(_mm_unpacklo_epi8(counts, zero), _mm_unpackhi_epi8(counts, zero));
-    sums = _mm_add_epi16(sums, _mm_srli_si128(sums, 8));  // lanes 0-3: the 4 dwords' sums
     const __m128i reached = _mm_cmpgt_epi16(sums, needLess1);
     return _mm_or_si128(m, _mm_and_si128(bit, _mm_shuffle_epi32(_mm_packs_epi16(reached, reached), 0)));
 }
@@ -366,7 +377,29 @@ std::array<std::uint8_t, 3> channelMedians(const std::uint32_t* pixels, int coun
         const Words need = wordsNeed(count - count / 2);
         Bytes m = zeroBytes(), bit = firstBit();
         for (int pass = 0; pass < 8; ++pass, bit = nextBit(bit))
-            m = stepOfWords(m, bit, blockCounts(bytes, blocks, limitsOf(m, bit)), need);
+            m = stepOfWords(m, bit, wordSums(blockCounts(bytes, blocks, limitsOf(m, bit))), need);
+        const std::uint32_t v = dwords(m)[0];
+        return {static_cast<std::uint8_t>(v), static_cast<std::uint8_t>(v >> 8), static_cast<std::uint8_t>(v >> 16)};
+    }
+    if (count <= 32767) {
+        // The same over chunks of 255 blocks, their 16-bit sums added
+        // (1388x1038, 665 chunks per decode: -0.08 M instructions
+        // per decode; apart from the above, where the chunk loop cost more
+        // than it saved here).
+        const auto* bytes = reinterpret_cast<const std::uint8_t*>(pixels);
+        const int blocks = (count + 3) / 4;
+        const Words need = wordsNeed(count - count / 2);
+        Bytes m = zeroBytes(), bit = firstBit();
+        for (int pass = 0; pass < 8; ++pass, bit = nextBit(bit)) {
+            const Bytes limit = limitsOf(m, bit);
+            Words sums = wordSums(blockCounts(bytes, 255, limit));
+            int first = 255;
+            do {
+                sums = addWords(sums, wordSums(blockCounts(bytes + 16 * first, std::min(blocks - first, 255), limit)));
+                first += 255;
+            } while (first < blocks);
+            m = stepOfWords(m, bit, sums, need);
+        }
         const std::uint32_t v = dwords(m)[0];
         return {static_cast<std::uint8_t>(v), static_cast<std::uint8_t>(v >> 8), static_cast<std::uint8_t>(v >> 16)};
     }
