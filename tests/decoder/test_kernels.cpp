@@ -143,27 +143,37 @@ TEST(DecoderKernels, EdgeLocationGradientsEqualReferenceOnSimulatorFrame)
 
 // Region medians whose fast selection differs from the reference: every
 // count up to 70 (around the 4-pixel blocks, and the tail alone) and a few
-// up to 3000 (past the 255 pixels the byte-lane search takes, the 64-block
-// steps of the 16-bit sums' loop and the 254 blocks of one chunk), of random bytes, of
+// up to 40000 (past the 255 pixels the byte-lane search takes, the 1020 of
+// the 16-bit lanes' search, the 64-block steps of the chunks' loop and the
+// 254 blocks of one chunk), of random bytes, of
 // few distinct values (ties at the median) and of the extremes 0 and 255.
+// Each region's pixels are followed by 3 entries of the value 0 (0x80
+// stored), as the kernels require.
 int regionMediansDiffering(unsigned seed)
 {
     std::mt19937 rng(seed);
-    std::vector<std::uint32_t> pixels(3000 + 4);
+    std::vector<std::uint32_t> pixels(40000 + 3);
     int differing = 0;
-    std::vector<std::uint32_t> other(5 + 255 + 4);
+    std::vector<std::uint32_t> other(3 * (255 + 3));
+    auto pad = [](std::uint32_t* end) { std::fill(end, end + 3, 0x80808080u); };
     auto compare = [&](int count) {
+        pad(pixels.data() + count);
         differing += channelMedians(pixels.data(), count) != channelMediansReference(pixels.data(), count);
         // The kernel for four regions: this one, then three of 1-255 random
         // pixels in the second buffer.
         const std::array<int, 4> counts{count, 1 + (count * 37) % 255, 1 + count % 16, 255 - count % 255};
-        const std::array<const std::uint32_t*, 4> regions{pixels.data(), other.data(), other.data() + 5,
-                                                          other.data() + 3};
+        const std::array<const std::uint32_t*, 4> regions{pixels.data(), other.data(), other.data() + 258,
+                                                          other.data() + 2 * 258};
         for (std::uint32_t& p : other) p = rng();
+        for (int j = 1; j < 4; ++j) pad(other.data() + 258 * (j - 1) + counts[j]);
         const auto medians = channelMediansOfFour(regions, counts);
-        for (int j = 0; j < 4; ++j) differing += medians[j] != channelMediansReference(regions[j], counts[j]);
+        for (int j = 0; j < 4; ++j) {
+            const std::array<std::uint8_t, 3> v = channelMediansReference(regions[j], counts[j]);
+            differing += medians[j] != static_cast<std::uint32_t>(v[0] | v[1] << 8 | v[2] << 16);
+        }
     };
-    for (int count : {1, 2, 3, 4, 5, 63, 64, 65, 252, 255, 256, 257, 511, 512, 516, 771, 1016, 1019, 1020, 3000})
+    for (int count : {1, 2, 3, 4, 5, 63, 64, 65, 252, 255, 256, 257, 511, 512, 516, 771, 1016, 1019, 1020, 1021,
+                      1024, 2040, 2041, 3000, 32767, 32768, 40000})
         for (int kind = 0; kind < 3; ++kind) {
             for (int i = 0; i < count; ++i) {
                 const std::uint32_t v = rng();
