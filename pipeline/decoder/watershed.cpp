@@ -63,9 +63,8 @@ std::uint64_t raisedFlat(const std::uint8_t* codes, const std::uint8_t* levels)
 }
 
 // Bit i set if code i of the span (at most 64) has bit 3 (kDescentFlat: in
-// step 3 the flat pixels, in step 4 the new minima's first pixels): 16 per
-// movemask (bit 3 shifted to each byte's bit 7) on SSE2, else 8 per
-// multiplication gathering the bits into a byte.
+// step 3 the flat pixels): 16 per movemask (bit 3 shifted to each byte's bit
+// 7) on SSE2, else 8 per multiplication gathering the bits into a byte.
 std::uint64_t bit3Word(const std::uint8_t* code, int span)
 {
     static_assert(std::endian::native == std::endian::little, "byte k of the word is pixel k");
@@ -148,6 +147,20 @@ std::int32_t findBasin(std::int32_t* parent, std::int32_t b)
 }
 
 }  // namespace
+
+// Provisional labels (step 3) at most: a minimum's run starts at a flat
+// pixel whose left neighbour is not flat, so a row has at most (width + 1) /
+// 2 new minima, and one below a new minimum's first pixel (flat) is none: two
+// rows hold at most width.
+std::size_t maxProvisional(int width, int height)
+{
+    return static_cast<std::size_t>(height / 2) * width + (height % 2) * ((width + 1) / 2);
+}
+
+std::size_t watershedOrderEntries(int width, int height)
+{
+    return 2 * maxProvisional(width, height);
+}
 
 std::size_t watershedScratchEntries(int width, int height)
 {
@@ -251,9 +264,14 @@ STRIA_X86_CLONES void computeWatershed(DecoderWorkspace& ws)
     // left if its left neighbour is flat, else up if the upper one is, else
     // kDescentFlat (the only code with bit 3): step 4's sweeps follow those
     // arrows from the first pixels, so only the new minima's first pixels
-    // take their basin by the union-find.
+    // take their basin by the union-find: the numbering below writes it
+    // there, at the first pixel kept for each provisional label (a list in
+    // raster order, where a loop over code bits per row mispredicted and
+    // took 0.4 M instructions more per 780x580 decode).
     std::fill(label, label + n, kUnresolved);
+    // (The order buffer: watershedOrderEntries.)
     std::int32_t* parent = ws.pixelOrder;
+    std::int32_t* firstPixel = parent + maxProvisional(w, h);  // of each provisional label
     auto* minimumCode = reinterpret_cast<std::uint8_t*>(ws.scratch.get() + codeEntries(n, w));
     const int words = runWords(w);
     RunWord* runs = runWordsIn(ws.scratch.get(), w, h);
@@ -293,6 +311,7 @@ STRIA_X86_CLONES void computeWatershed(DecoderWorkspace& ws)
             for (std::uint64_t bits = runs[k].fresh; bits != 0; bits &= bits - 1) {
                 const int x = 64 * k + std::countr_zero(bits);
                 parent[provisional] = ~(y * w + x);
+                firstPixel[provisional] = y * w + x;
                 row[x] = ~provisional++;
             }
         for (int k = 0; k < words; ++k)
@@ -352,34 +371,29 @@ STRIA_X86_CLONES void computeWatershed(DecoderWorkspace& ws)
         const std::int32_t up = parent[l], root = up >> 31;  // -1 for a root
         const std::int32_t number = (~up & numbered) | (next & ~numbered);
         parent[l] = (number & root) | (parent[up & ~root] & ~root);
+        label[firstPixel[l]] = parent[l];
         next -= root;
     }
 
     // 4. Every pixel takes the basin at the end of its arrows, row by row
-    // from the top (the row above is labelled): the minima's first pixels
-    // theirs from the union-find, then a sweep to the right copies the
+    // from the top (the row above is labelled; the new minima's first pixels
+    // hold their basins already): a sweep to the right copies the
     // labels along arrows up and left, one to the left those along arrows
     // right (a run of arrows ends at a pixel with an arrow up, a minimum's
     // first pixel or an arrow down, never at one against it), without a
     // branch (sweepRow). What remains leads down: those pixels, marked in bit
     // masks by the last sweep, walk to a labelled pixel and label the path on
     // the way back (the first kWalkSteps steps without a branch). A walk
-    // ends at a path labelled before or, in a row below, at the first pixel
-    // of a minimum's run (along the run's arrows), which still holds its
-    // provisional label.
+    // ends at a path labelled before or, in a row below, at a new minimum's
+    // first pixel: in a minimum it follows the runs' arrows up and left,
+    // through the first pixels of the runs below another run, whose
+    // provisional labels (~label) are negative like kUnresolved, so a walk
+    // tells a final label by its sign alone and reads no union-find.
     // The row's unresolved pixels as bits (sweepRow), in the run words' place.
     auto* unresolved = reinterpret_cast<std::uint64_t*>(runs);
-    int firstSeen = 0;
     for (int y = 0; y < h; ++y) {
         const std::uint8_t* rowCode = code + y * w;
         std::int32_t* row = label + y * w;
-        // The new minima's first pixels hold provisional labels 0, 1, 2, ...
-        // in raster order (step 3): the label is the count so far, not loaded.
-        // Their pixels are the only ones with code bit 3 (kMinimumArrow |
-        // kDescentFlat), found 64 at a time.
-        for (int x0 = 0; x0 < w; x0 += 64)
-            for (std::uint64_t bits = bit3Word(rowCode + x0, std::min(64, w - x0)); bits != 0; bits &= bits - 1)
-                row[x0 + std::countr_zero(bits)] = parent[firstSeen++];
         sweepRow(rowCode, y > 0 ? row - w : row, row, w, unresolved);  // no arrow up in row 0
         for (int x0 = 0; x0 < w; x0 += 64)
             for (std::uint64_t bits = unresolved[x0 / 64]; bits != 0; bits &= bits - 1) {
@@ -387,27 +401,24 @@ STRIA_X86_CLONES void computeWatershed(DecoderWorkspace& ws)
                 // to 5 steps, 3 on average; the branches on their ends
                 // mispredicted, about 2 per walk): a walk that has ended
                 // stays at its end, and the path's pixels are the steps' own
-                // positions, labelled without walking the path again. Writing
-                // the basin at the end too is harmless: the label there is
-                // the basin already, or a provisional label in a row below
-                // (a minimum run's first pixel), which that row replaces by
-                // the same basin (the first pixels' loop above, or the sweep
-                // along the pixel's arrow up). Without branches the core
+                // positions, labelled without walking the path again (the
+                // basin written at the end too, where it is already). Where
+                // a path crosses a run's first pixel with a provisional label
+                // the basin replaces it, as that row's sweep will along the
+                // pixel's arrow up. Without branches the core
                 // overlaps the next walks with this one's loads (often L1
                 // misses: a step down is a row away), as the two walks at a
                 // time this replaced did by hand.
                 std::array<std::ptrdiff_t, kWalkSteps + 1> path;
                 path[0] = y * w + x0 + std::countr_zero(bits);
                 for (int k = 0; k < kWalkSteps; ++k) {
-                    // (As a mask: GCC made the ternary a branch.)
-                    const std::ptrdiff_t q = path[k], on = -static_cast<std::ptrdiff_t>(label[q] == kUnresolved);
+                    // (As a mask: GCC made a ternary a branch.)
+                    const std::ptrdiff_t q = path[k], on = label[q] >> 31;  // -1 while not final
                     path[k + 1] = q + (step[code[q] & 3] & on);
                 }
                 std::ptrdiff_t end = path[kWalkSteps];
-                while (label[end] == kUnresolved) end += step[code[end] & 3];  // the longer walks go on
-                // Without a branch: parent[0] read in vain if the end's label is final.
-                const std::int32_t last = label[end], provisional = last >> 31;  // -1 if ~(a provisional label)
-                const std::int32_t basin = last ^ ((last ^ parent[~last & provisional]) & provisional);
+                while (label[end] < 0) end += step[code[end] & 3];  // the longer walks go on
+                const std::int32_t basin = label[end];
                 for (int k = 0; k < kWalkSteps; ++k) label[path[k]] = basin;
                 for (std::ptrdiff_t r = path[kWalkSteps]; r != end; r += step[code[r] & 3]) label[r] = basin;
             }
