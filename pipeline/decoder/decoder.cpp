@@ -77,7 +77,7 @@ std::size_t allocateFrameBuffers(DecoderWorkspace& ws)
     ws.gradient = allocate<std::uint8_t>(std::max(n, borderBytes), bytes);
     ws.rowBorders = reinterpret_cast<std::uint64_t*>(ws.gradient.get());
     ws.labels = allocate<std::int32_t>(n, bytes);
-    ws.orderEntries = std::max<std::size_t>({regionOrderEntries(n, ws.maxRegions),
+    ws.orderEntries = std::max<std::size_t>({watershedOrderEntries(w, h), regionOrderEntries(n, ws.maxRegions),
                                              graphTableEntries(ws.maxRegions, ws.maxEdges),
                                              sizeof(EdgeChange) / sizeof(std::int32_t) * ws.maxEdges});
     ws.orderAndPoints = allocate<std::byte>(ws.orderEntries * sizeof(std::int32_t), bytes);

@@ -28,6 +28,25 @@ inline void descentPixel(const std::uint8_t* up, const std::uint8_t* row, const 
     code[x] = lowest < row[x] ? direction : kDescentFlat;
 }
 
+#if !defined(__ARM_NEON)
+// descentRow's block of pixels 0 to kDescentBlock - 1 of the pointers, in a
+// loop GCC vectorises (ivdep: once inlined, it tested the pointers for
+// overlap in every block, restrict or not).
+constexpr int kDescentBlock = 32;
+[[gnu::always_inline]] inline void descentBlock(const std::uint8_t* __restrict u, const std::uint8_t* __restrict c,
+                                                const std::uint8_t* __restrict d, std::uint8_t* __restrict out)
+{
+#pragma GCC ivdep
+    for (int i = 0; i < kDescentBlock; ++i) {
+        const std::uint8_t lowest = std::min(std::min(u[i], c[i - 1]), std::min(c[i + 1], d[i]));
+        std::uint8_t direction = c[i + 1] == lowest ? kDescentRight : kDescentDown;
+        direction = c[i - 1] == lowest ? kDescentLeft : direction;
+        direction = u[i] == lowest ? kDescentUp : direction;
+        out[i] = lowest < c[i] ? direction : kDescentFlat;
+    }
+}
+#endif
+
 }  // namespace
 
 void descentRowReference(const std::uint8_t* up, const std::uint8_t* row, const std::uint8_t* down, int width,
@@ -47,13 +66,18 @@ STRIA_X86_CLONES void descentRow(const std::uint8_t* up, const std::uint8_t* row
     }
     descentPixel(up, row, down, width, 0, code);
     int x = 1;
+    // Pixels 1 to width - 2 in blocks; where the row does not divide into
+    // them, a last block ends at pixel width - 2, over pixels done already
+    // (they get the same codes again), instead of a tail pixel by pixel,
+    // whose branches on the levels mispredicted (the blocks took 0.15 M
+    // instructions and 2.4 k mispredictions off a 780x580 decode on x86-64).
 #if defined(__ARM_NEON)
     // 16 pixels at once: the lowest neighbour by vminq, its direction by
     // selects in reverse tie order (the last select wins), all in byte lanes.
     const uint8x16_t toUp = vdupq_n_u8(kDescentUp), toLeft = vdupq_n_u8(kDescentLeft),
                      toRight = vdupq_n_u8(kDescentRight), toDown = vdupq_n_u8(kDescentDown),
                      flat = vdupq_n_u8(kDescentFlat);
-    for (; x + 16 < width; x += 16) {
+    auto block = [&](int x) {
         const uint8x16_t u = vld1q_u8(up + x), l = vld1q_u8(row + x - 1), c = vld1q_u8(row + x),
                          r = vld1q_u8(row + x + 1), d = vld1q_u8(down + x);
         const uint8x16_t lowest = vminq_u8(vminq_u8(u, l), vminq_u8(r, d));
@@ -61,21 +85,19 @@ STRIA_X86_CLONES void descentRow(const std::uint8_t* up, const std::uint8_t* row
         direction = vbslq_u8(vceqq_u8(l, lowest), toLeft, direction);
         direction = vbslq_u8(vceqq_u8(u, lowest), toUp, direction);
         vst1q_u8(code + x, vbslq_u8(vcltq_u8(lowest, c), direction, flat));
-    }
+    };
+    constexpr int kBlock = 16;
 #else
-    // The same selects in a loop GCC vectorises (SSE2 byte lanes on x86-64).
-    const std::uint8_t* __restrict u = up;
-    const std::uint8_t* __restrict c = row;
-    const std::uint8_t* __restrict d = down;
-    std::uint8_t* __restrict out = code;
-    for (; x + 1 < width; ++x) {
-        const std::uint8_t lowest = std::min(std::min(u[x], c[x - 1]), std::min(c[x + 1], d[x]));
-        std::uint8_t direction = c[x + 1] == lowest ? kDescentRight : kDescentDown;
-        direction = c[x - 1] == lowest ? kDescentLeft : direction;
-        direction = u[x] == lowest ? kDescentUp : direction;
-        out[x] = lowest < c[x] ? direction : kDescentFlat;
-    }
+    // The same selects in a loop GCC vectorises (SSE2 byte lanes on x86-64;
+    // the block's fixed length: no scalar tail of its own).
+    constexpr int kBlock = kDescentBlock;
+    auto block = [&](int x) { descentBlock(up + x, row + x, down + x, code + x); };
 #endif
+    if (width >= kBlock + 2) {
+        for (; x + kBlock < width; x += kBlock) block(x);
+        if (x < width - 1) block(width - 1 - kBlock);
+        x = width - 1;
+    }
     for (; x < width; ++x) descentPixel(up, row, down, width, x, code);
 }
 

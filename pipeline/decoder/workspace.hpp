@@ -110,7 +110,7 @@ struct DecoderWorkspace {
     // below), then the output points (depth). Points are 24 bytes, so
     // maxPoints = pixels / 6 fits exactly.
     std::unique_ptr<std::byte[]> orderAndPoints;
-    // Its size in int32 entries: max(regionOrderEntries, graphTableEntries, 4 maxEdges).
+    // Its size in int32 entries: max(watershedOrderEntries, regionOrderEntries, graphTableEntries, 4 maxEdges).
     std::size_t orderEntries = 0;
     std::int32_t* pixelOrder = nullptr;
     ScanPoint* points = nullptr;
@@ -157,6 +157,9 @@ inline int borderWords(int width) { return (width + 62) / 64; }
 
 // Watershed: the scratch entries it needs (a descent code byte per pixel).
 std::size_t watershedScratchEntries(int width, int height);
+// The order buffer entries the watershed's union-find takes (a parent and a
+// first pixel per provisional label: at most about one per two pixels).
+std::size_t watershedOrderEntries(int width, int height);
 // Region statistics and graph construction: the scratch entries they need.
 std::size_t regionScratchEntries(std::size_t regions);
 // The order buffer entries the region stage's sorted pixels take (a gap
