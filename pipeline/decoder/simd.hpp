@@ -74,7 +74,8 @@ inline constexpr std::int32_t kUnresolved = std::numeric_limits<std::int32_t>::m
 // row's ends the label is kUnresolved. above: width labels (in row 0, which
 // has no arrow up, any width readable labels, e.g. the row itself).
 // sweepRow takes 4 labels per step, runs of arrows by a prefix scan (GCC
-// vector extensions: SSE2 on x86-64, NEON on ARM). unresolved: (width + 63) /
+// vector extensions: SSE2 on x86-64, 8 labels in its AVX2/AVX-512 versions;
+// NEON intrinsics on arm64, the scan as one tbx lookup). unresolved: (width + 63) /
 // 64 words, bit x % 64 of word x / 64 set where row[x] is negative after the
 // sweeps (kUnresolved: in the watershed no other label is negative by then).
 void sweepRowReference(const std::uint8_t* code, const std::int32_t* above, std::int32_t* row, int width,

@@ -52,15 +52,21 @@ void windows(const std::uint8_t* row, int width, const std::int32_t* firsts, con
              const std::array<int, 3>& rgbOffset, const cv::Matx33f& m, std::array<float, kWindowSamples + 1>* out)
 {
 #if defined(__ARM_NEON)
+    // first < 0 or first + kWindowSamples > width - 1 as one unsigned compare
+    // (as in the AVX2 version).
+    const unsigned uncutEnd = static_cast<unsigned>(std::max(width - kWindowSamples, 0));
     for (int j = 0; j < count; ++j) {
         const int first = firsts[j];
-        if (first < 0 || first + kWindowSamples > width - 1) {
+        if (static_cast<unsigned>(first) >= uncutEnd) {
             clippedWindow(row, width, first, rgbOffset, m, weights[j], out[j].data());
             continue;
         }
         // Pixels first .. first + 7 and first + 1 .. first + 8, de-interleaved.
-        const uint8x8x3_t here = vld3_u8(row + 3 * first), next = vld3_u8(row + 3 * (first + 1));
+        const std::uint8_t* p = row + 3 * first;
+        const uint8x8x3_t here = vld3_u8(p), next = vld3_u8(p + 3);
         constexpr int byte[3] = {bgr ? 2 : 0, 1, bgr ? 0 : 2};  // of R, G, B in a pixel
+        // The weights loaded once (out[j] might alias them: GCC reloaded them for the second half).
+        const float weight[3] = {weights[j][0], weights[j][1], weights[j][2]};
         for (int half = 0; half < 2; ++half) {
             float32x4_t raw[3];
             for (int c = 0; c < 3; ++c) {
@@ -71,7 +77,6 @@ void windows(const std::uint8_t* row, int width, const std::int32_t* firsts, con
             for (int k = 0; k < 3 && !identity; ++k)
                 corrected[k] = vaddq_f32(vaddq_f32(vmulq_n_f32(raw[0], m(k, 0)), vmulq_n_f32(raw[1], m(k, 1))),
                                          vmulq_n_f32(raw[2], m(k, 2)));
-            const cv::Vec3f& weight = weights[j];
             const float32x4_t sum = vaddq_f32(vaddq_f32(vmulq_n_f32(corrected[0], weight[0]), vmulq_n_f32(corrected[1], weight[1])),
                                               vmulq_n_f32(corrected[2], weight[2]));
             vst1q_f32(out[j].data() + 4 * half, sum);

@@ -109,7 +109,7 @@ namespace {
 constexpr std::uint8_t kArrowBits = 0xff & ~kPlateauArrow & ~kMinimumArrow;
 
 // Four labels or lane masks, in GCC's vector extensions: one source for the
-// SSE2 and NEON instructions (shuffles, compares, and/or). The x86-64-v3/v4
+// SSE2 and (32-bit ARM) NEON instructions (shuffles, compares, and/or). The x86-64-v3/v4
 // versions of the sweeps take eight (Lanes8, below): a block's prefix scan
 // in 3 steps instead of 2, but half the blocks, so half the steps of the
 // carry chain per row.
@@ -213,8 +213,9 @@ template <typename V>
 // to block is this carry alone. On x86-64 it is (carry & m's last lane) |
 // (own's last lane), the broadcasts off the chain: one vpternlogd in the
 // AVX-512 version (watershed 1.37 -> 1.21 ms at 780x580), where a select then
-// a broadcast took 3 dependent instructions. On ARM a vbsl then a dup, 4
-// instructions fewer per block than the and-or. The AVX2 version (blend)
+// a broadcast took 3 dependent instructions. On other targets (32-bit ARM: a
+// vbsl then a dup) the select then the broadcast; arm64 has its own sweeps
+// (sweepNeon, below). The AVX2 version (blend)
 // takes the select then the broadcast too: one vblendvps and one vpermd,
 // where the and-or took 7 instructions (no vpternlogd).
 // (stored: the block as stored, for the unresolved mask of the last sweep.)
@@ -255,16 +256,10 @@ template <typename V>
     }
     return bits;
 #else
-    // Lane i's weight 2^i, summed (one addv on arm64).
+    // Lane i's weight 2^i, summed. (arm64 has its own sweeps, below.)
     static_assert(kLanes<V> == 4);
     const V bits = (v >> 31) & V{1, 2, 4, 8};
-#if defined(__aarch64__)
-    int32x4_t lanes;
-    std::memcpy(&lanes, &bits, sizeof lanes);
-    return static_cast<std::uint64_t>(vaddvq_s32(lanes));
-#else
     return static_cast<std::uint64_t>(bits[0] + bits[1] + bits[2] + bits[3]);
-#endif
 #endif
 }
 
@@ -382,6 +377,139 @@ using Lanes8 = std::int32_t __attribute__((vector_size(32)));
 }
 #endif
 
+#if defined(__aarch64__)
+// arm64: the same sweeps in NEON intrinsics, 4 labels per q register, in
+// fewer instructions per block than GCC made of the generic template above
+// (its shuffles became 2-register tbl lookups with 2 register copies each,
+// the codes a movi and 4 lane inserts: 31 + 37 instructions per block, 17
+// per pixel; here 18 + 15 per block and the bits' pass, about 8.5 per pixel,
+// sweepRow per 780x580 decode 7.73 -> 3.99 M instructions):
+// - a block's codes by one broadcast, and-compares as codesOf/arrowsIn;
+// - the run scan resolved to one table lookup: each lane holds its own
+//   labels' byte indices (byte k of lane i: 4 i + k), or -1 (0xff bytes,
+//   outside the table) where its mask is set. A prefix max over the lanes
+//   (2 ext + smax steps, -1 shifted in) gives each lane the indices of the
+//   nearest lane at or left of it that keeps its own label; tbx copies that
+//   lane's label and leaves the carry (the destination) where the indices
+//   are -1: the lanes that copy from beyond the block. The right sweep the
+//   same mirrored: unsigned min, 0xffffffff shifted in from the right;
+// - the unresolved bits by a pass over the finished row, 64 labels per word:
+//   ld4 deinterleaves the labels' bytes, so its 4th register holds the 16
+//   top bytes (sign bits) in pixel order; the signs as bit weights and 3
+//   rounds of pairwise adds give the 64 bits (17 instructions per word, where
+//   the per-block sign bits (cmlt, and, addv) and the word's or took 9 per 4).
+
+// value in byte k of lane k.
+constexpr uint32x4_t byteK(std::uint32_t value) { return uint32x4_t{value, value << 8, value << 16, value << 24}; }
+
+// Lane k's byte k is pixel k's code (a broadcast of the 4 codes), the other
+// bytes and bits kPlateauArrow and kMinimumArrow cleared.
+[[gnu::always_inline]] inline uint32x4_t maskedCodes(const std::uint8_t* code)
+{
+    static_assert(std::endian::native == std::endian::little, "byte k of the word is pixel k");
+    using Unaligned = std::uint32_t __attribute__((aligned(1), may_alias));  // one ld1r
+    return vandq_u32(vdupq_n_u32(*reinterpret_cast<const Unaligned*>(code)), byteK(kArrowBits));
+}
+
+// -1 in the lanes whose (masked) code is the direction, else 0.
+[[gnu::always_inline]] inline uint32x4_t arrowsMask(uint32x4_t codes, std::uint8_t direction)
+{
+    return vceqq_u32(codes, byteK(direction));
+}
+
+// Byte k of lane i: 4 i + k, lane i's label's bytes in a tbl/tbx lookup.
+constexpr uint32x4_t kLaneBytes = {0x03020100, 0x07060504, 0x0b0a0908, 0x0f0e0d0c};
+
+// The labels of a block with the lanes of mask m copying their left
+// neighbour's (lane 0: the carry's, the label left of the block in every
+// lane) as it is by then (scalar reference: the second loop of
+// sweepRowUpLeftReference).
+[[gnu::always_inline]] inline int32x4_t copyLeft(int32x4_t v, uint32x4_t m, int32x4_t carry)
+{
+    const int32x4_t none = vdupq_n_s32(-1);
+    int32x4_t source = vreinterpretq_s32_u32(vorrq_u32(m, kLaneBytes));
+    source = vmaxq_s32(source, vextq_s32(none, source, 3));
+    source = vmaxq_s32(source, vextq_s32(none, source, 2));
+    return vreinterpretq_s32_u8(vqtbx1q_u8(vreinterpretq_u8_s32(carry), vreinterpretq_u8_s32(v),
+                                           vreinterpretq_u8_s32(source)));
+}
+
+// The same from the right (lane 3: the carry's).
+[[gnu::always_inline]] inline int32x4_t copyRight(int32x4_t v, uint32x4_t m, int32x4_t carry)
+{
+    const uint32x4_t none = vdupq_n_u32(~0u);
+    uint32x4_t source = vorrq_u32(m, kLaneBytes);
+    source = vminq_u32(source, vextq_u32(source, none, 1));
+    source = vminq_u32(source, vextq_u32(source, none, 2));
+    return vreinterpretq_s32_u8(vqtbx1q_u8(vreinterpretq_u8_s32(carry), vreinterpretq_u8_s32(v),
+                                           vreinterpretq_u8_u32(source)));
+}
+
+void upLeftNeon(const std::uint8_t* code, const std::int32_t* above, std::int32_t* row, int width)
+{
+    const int blocks = width & ~3;
+    int32x4_t carry = vdupq_n_s32(kUnresolved);
+    // (Pointers: post-indexed loads and stores, 2 instructions of loop per block.)
+    const std::uint8_t* c = code;
+    const std::int32_t* a = above;
+    for (std::int32_t* r = row; r != row + blocks; c += 4, a += 4, r += 4) {
+        const uint32x4_t codes = maskedCodes(c);
+        const int32x4_t v = vbslq_s32(arrowsMask(codes, kDescentUp), vld1q_s32(a), vld1q_s32(r));
+        const int32x4_t stored = copyLeft(v, arrowsMask(codes, kDescentLeft), carry);
+        vst1q_s32(r, stored);
+        carry = vdupq_laneq_s32(stored, 3);
+    }
+    std::int32_t previous = blocks > 0 ? row[blocks - 1] : kUnresolved;
+    for (int x = blocks; x < width; ++x) {
+        if ((code[x] & kArrowBits) == kDescentUp) row[x] = above[x];
+        if ((code[x] & kArrowBits) == kDescentLeft) row[x] = previous;
+        previous = row[x];
+    }
+}
+
+// 16 labels' sign bits as bit weights: byte k of the 4th ld4 register is
+// label k's top byte.
+[[gnu::always_inline]] inline uint8x16_t signWeights(const std::int32_t* p)
+{
+    const uint8x16x4_t bytes = vld4q_u8(reinterpret_cast<const std::uint8_t*>(p));
+    const uint8x16_t weights = {1, 2, 4, 8, 16, 32, 64, 128, 1, 2, 4, 8, 16, 32, 64, 128};
+    return vandq_u8(vreinterpretq_u8_s8(vshrq_n_s8(vreinterpretq_s8_u8(bytes.val[3]), 7)), weights);
+}
+
+void sweepNeon(const std::uint8_t* code, const std::int32_t* above, std::int32_t* row, int width,
+               std::uint64_t* unresolved)
+{
+    upLeftNeon(code, above, row, width);
+    const int blocks = width & ~3;
+    std::int32_t next = kUnresolved;
+    for (int x = width - 1; x >= blocks; --x) {
+        if ((code[x] & kArrowBits) == kDescentRight) row[x] = next;
+        next = row[x];
+    }
+    int32x4_t carry = vdupq_n_s32(next);
+    for (int x = blocks - 4; x >= 0; x -= 4) {
+        const int32x4_t stored = copyRight(vld1q_s32(row + x), arrowsMask(maskedCodes(code + x), kDescentRight), carry);
+        vst1q_s32(row + x, stored);
+        carry = vdupq_laneq_s32(stored, 0);
+    }
+    // The unresolved bits (negative labels), 64 per word, then 16, then 1.
+    int x = 0;
+    for (; x + 64 <= width; x += 64) {
+        const uint8x16_t pairs = vpaddq_u8(vpaddq_u8(signWeights(row + x), signWeights(row + x + 16)),
+                                           vpaddq_u8(signWeights(row + x + 32), signWeights(row + x + 48)));
+        unresolved[x >> 6] = vgetq_lane_u64(vreinterpretq_u64_u8(vpaddq_u8(pairs, pairs)), 0);
+    }
+    if (x == width) return;
+    std::uint64_t word = 0;
+    for (; x + 16 <= width; x += 16) {
+        const uint8x16_t w = signWeights(row + x), pairs = vpaddq_u8(w, w), quads = vpaddq_u8(pairs, pairs);
+        word |= std::uint64_t{vgetq_lane_u16(vreinterpretq_u16_u8(vpaddq_u8(quads, quads)), 0)} << (x & 63);
+    }
+    for (; x < width; ++x) word |= std::uint64_t{row[x] < 0} << (x & 63);
+    unresolved[(width - 1) >> 6] = word;
+}
+#endif
+
 }  // namespace
 
 void sweepRowUpLeftReference(const std::uint8_t* code, const std::int32_t* above, std::int32_t* row, int width)
@@ -406,6 +534,8 @@ void sweepRowUpLeft(const std::uint8_t* code, const std::int32_t* above, std::in
 {
 #if defined(__x86_64__)
     upLeftVersion(code, above, row, width);
+#elif defined(__aarch64__)
+    upLeftNeon(code, above, row, width);
 #else
     upLeftLanes<Lanes>(code, above, row, width);
 #endif
@@ -416,6 +546,8 @@ void sweepRow(const std::uint8_t* code, const std::int32_t* above, std::int32_t*
 {
 #if defined(__x86_64__)
     sweepVersion(code, above, row, width, unresolved);
+#elif defined(__aarch64__)
+    sweepNeon(code, above, row, width, unresolved);
 #else
     sweepLanes<Lanes>(code, above, row, width, unresolved);
 #endif
