@@ -43,30 +43,30 @@ inline void gradient16(const std::uint8_t* up, const std::uint8_t* row, const st
     const uint8x16x3_t dl = vld3q_u8(down + 3 * (x - 1)), dh = vld3q_u8(down + 3 * x),
                        dr = vld3q_u8(down + 3 * (x + 1));
     uint16x8_t best[2] = {vdupq_n_u16(0), vdupq_n_u16(0)}, bestAlong[2] = {vdupq_n_u16(0), vdupq_n_u16(0)};
-    // Each Sobel sum as the difference of two smoothed columns (or rows),
-    // a + 2 b + c <= 1020 by uaddl and umlal in uint16 lanes: the
-    // difference's uint16 wrap is its int16 value (5 instructions per 8
-    // lanes; 3 differences, 2 adds and a shift took 6).
+    // Each Sobel sum's absolute value as the absolute difference (uabd) of
+    // two smoothed columns (or rows), a + 2 b + c <= 1020 by uaddl and umlal
+    // in uint16 lanes (5 instructions per 8 lanes; 3 differences, 2 adds, a
+    // shift and the absolute value took 7).
     const uint8x16_t two = vdupq_n_u8(2);
     const uint8x8_t twoLow = vget_low_u8(two);
     auto sobelLow = [&](uint8x16_t a1, uint8x16_t b1, uint8x16_t c1, uint8x16_t a0, uint8x16_t b0, uint8x16_t c0) {
         const uint16x8_t plus = vmlal_u8(vaddl_u8(vget_low_u8(a1), vget_low_u8(c1)), vget_low_u8(b1), twoLow);
         const uint16x8_t minus = vmlal_u8(vaddl_u8(vget_low_u8(a0), vget_low_u8(c0)), vget_low_u8(b0), twoLow);
-        return vreinterpretq_s16_u16(vsubq_u16(plus, minus));
+        return vabdq_u16(plus, minus);
     };
     auto sobelHigh = [&](uint8x16_t a1, uint8x16_t b1, uint8x16_t c1, uint8x16_t a0, uint8x16_t b0, uint8x16_t c0) {
         const uint16x8_t plus = vmlal_high_u8(vaddl_high_u8(a1, c1), b1, two);
         const uint16x8_t minus = vmlal_high_u8(vaddl_high_u8(a0, c0), b0, two);
-        return vreinterpretq_s16_u16(vsubq_u16(plus, minus));
+        return vabdq_u16(plus, minus);
     };
     for (int c = 0; c < 3; ++c) {
-        const int16x8_t hx[2] = {sobelLow(ur.val[c], rr.val[c], dr.val[c], ul.val[c], rl.val[c], dl.val[c]),
+        const uint16x8_t hx[2] = {sobelLow(ur.val[c], rr.val[c], dr.val[c], ul.val[c], rl.val[c], dl.val[c]),
                                  sobelHigh(ur.val[c], rr.val[c], dr.val[c], ul.val[c], rl.val[c], dl.val[c])};
-        const int16x8_t vy[2] = {sobelLow(dl.val[c], dh.val[c], dr.val[c], ul.val[c], uh.val[c], ur.val[c]),
+        const uint16x8_t vy[2] = {sobelLow(dl.val[c], dh.val[c], dr.val[c], ul.val[c], uh.val[c], ur.val[c]),
                                  sobelHigh(dl.val[c], dh.val[c], dr.val[c], ul.val[c], uh.val[c], ur.val[c])};
         for (int half = 0; half < 2; ++half) {
-            const uint16x8_t gx = vshrq_n_u16(vreinterpretq_u16_s16(vabsq_s16(hx[half])), 2);
-            const uint16x8_t gy = vshrq_n_u16(vreinterpretq_u16_s16(vabsq_s16(vy[half])), 2);
+            const uint16x8_t gx = vshrq_n_u16(hx[half], 2);
+            const uint16x8_t gy = vshrq_n_u16(vy[half], 2);
             best[half] = vmaxq_u16(best[half], vaddq_u16(gx, gy));
             bestAlong[half] = vmaxq_u16(bestAlong[half], alongY ? gy : gx);
         }
