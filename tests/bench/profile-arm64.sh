@@ -99,7 +99,8 @@ awk -v w1="$w1" -v h1="$h1" -v w2="$w2" -v h2="$h2" '
         for (i = 1; i <= 8; ++i) {
             a = (n[f3, labels[i]] - n[f1, labels[i]]) / 2; b = (n[g3, labels[i]] - n[g1, labels[i]]) / 2
             ta += a; tb += b
-            printf "| %s | %.1f M | %.0f | %.1f M | %.0f |\n", labels[i], a / 1e6, a / (w1 * h1), b / 1e6, b / (w2 * h2)
+            name = labels[i] == "decode" ? "decode() before the gradient" : labels[i]
+            printf "| %s | %.1f M | %.0f | %.1f M | %.0f |\n", name, a / 1e6, a / (w1 * h1), b / 1e6, b / (w2 * h2)
         }
         printf "| **decode total** | **%.1f M** | **%.0f** | **%.1f M** | **%.0f** |\n", ta / 1e6, ta / (w1 * h1), tb / 1e6, tb / (w2 * h2)
     }' "$work/desktop/count1" "$work/desktop/count3" "$work/desktop-large/count1" "$work/desktop-large/count3"
