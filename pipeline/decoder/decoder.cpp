@@ -134,6 +134,7 @@ Result<std::unique_ptr<Decoder>> Decoder::create(const StripePattern& pattern, c
     ws->open = allocate<OpenEntry>(ws->maxOpen, bytes);
     ws->candidates = allocate<std::int32_t>(pattern.edgeCount(), bytes);
     ws->pathVertices = allocate<std::int32_t>(2 * (pattern.window() + 1) + 1, bytes);
+    setFirstStepSymbols(*ws);
     ws->componentSize = allocate<std::int32_t>(ws->maxRegions, bytes);
 
     ws->lightPlanes = allocate<Plane>(pattern.edgeCount(), bytes);

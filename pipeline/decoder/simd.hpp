@@ -12,6 +12,10 @@
 #include <cstdint>
 #include <limits>
 
+#if defined(__aarch64__)
+#include <arm_neon.h>
+#endif
+
 // x86-64 builds target SSE2; the hottest kernels are also compiled for
 // x86-64-v3 (AVX2) and -v4 (AVX-512), and the loader picks the best the CPU
 // has (an ifunc per kernel): gradientRow as clones of one body
@@ -35,6 +39,23 @@
 #endif
 
 namespace stria::pipeline {
+
+#if defined(__aarch64__)
+// AArch64 has no movemask: bit i of the result is set where byte i of the 64
+// in m0..m3 (each byte 0 or 0xff) is set. Each byte keeps its own bit of its
+// group of 8 (1, 2, .., 128), and three rounds of pairwise adds sum each
+// group into one byte (19 instructions per 64 bytes, where 16 per 16 took
+// two addv and a shift). The watershed's flat pixels and sweeps and the
+// graph's border masks take it.
+[[gnu::always_inline]] inline std::uint64_t byteMask64(uint8x16_t m0, uint8x16_t m1, uint8x16_t m2, uint8x16_t m3)
+{
+    const uint8x16_t weights = vreinterpretq_u8_u64(vdupq_n_u64(0x8040201008040201ull));
+    const uint8x16_t a = vpaddq_u8(vandq_u8(m0, weights), vandq_u8(m1, weights));
+    const uint8x16_t b = vpaddq_u8(vandq_u8(m2, weights), vandq_u8(m3, weights));
+    const uint8x16_t ab = vpaddq_u8(a, b);
+    return vgetq_lane_u64(vreinterpretq_u64_u8(vpaddq_u8(ab, ab)), 0);
+}
+#endif
 
 // One row of the gradient stage (gradient.cpp) from the rows above, at and
 // below it (clamped at the image border by the caller): per pixel,

@@ -39,6 +39,14 @@ void clippedWindow(const std::uint8_t* row, int width, int first, const std::arr
     if (lo <= hi) projectedGradientsReference(row, lo, hi - lo + 1, rgbOffset, m, weight, out + (lo - first));
 }
 
+// Whether the row's ends cut the window at `first` (first < 0 or first +
+// kWindowSamples > width - 1), as one unsigned compare: first >= the end of
+// the first columns of uncut windows (0 if none).
+[[gnu::always_inline]] inline bool windowCut(int first, int width)
+{
+    return static_cast<unsigned>(first) >= static_cast<unsigned>(std::max(width - kWindowSamples, 0));
+}
+
 // The windows inside the row, for pixels in B G R (bgr) or R G B order
 // (a template: the channel order is resolved at compile time, not by an
 // index per step). Products summed without the reference's leading 0 + :
@@ -52,12 +60,9 @@ void windows(const std::uint8_t* row, int width, const std::int32_t* firsts, con
              const std::array<int, 3>& rgbOffset, const cv::Matx33f& m, std::array<float, kWindowSamples + 1>* out)
 {
 #if defined(__ARM_NEON)
-    // first < 0 or first + kWindowSamples > width - 1 as one unsigned compare
-    // (as in the AVX2 version).
-    const unsigned uncutEnd = static_cast<unsigned>(std::max(width - kWindowSamples, 0));
     for (int j = 0; j < count; ++j) {
         const int first = firsts[j];
-        if (static_cast<unsigned>(first) >= uncutEnd) {
+        if (windowCut(first, width)) {
             clippedWindow(row, width, first, rgbOffset, m, weights[j], out[j].data());
             continue;
         }
@@ -89,7 +94,7 @@ void windows(const std::uint8_t* row, int width, const std::int32_t* firsts, con
     const __m128i zero = _mm_setzero_si128();
     for (int j = 0; j < count; ++j) {
         const int first = firsts[j];
-        if (first < 0 || first + kWindowSamples > width - 1) {
+        if (windowCut(first, width)) {
             clippedWindow(row, width, first, rgbOffset, m, weights[j], out[j].data());
             continue;
         }
@@ -174,12 +179,9 @@ template <bool bgr, bool identity>
     __m256 mm[3][3];
     for (int k = 0; k < 3; ++k)
         for (int c = 0; c < 3; ++c) mm[k][c] = _mm256_set1_ps(m(k, c));
-    // first < 0 or first + kWindowSamples > width - 1 as one unsigned compare:
-    // first >= the end of the first columns of uncut windows (0 if none).
-    const unsigned uncutEnd = static_cast<unsigned>(std::max(width - kWindowSamples, 0));
     for (int j = 0; j < count; ++j) {
         const int first = firsts[j];
-        if (static_cast<unsigned>(first) >= uncutEnd) {
+        if (windowCut(first, width)) {
             clippedWindow(row, width, first, rgbOffset, m, weights[j], out[j].data());
             continue;
         }
@@ -205,45 +207,51 @@ template <bool bgr, bool identity>
 
 // The version per CPU, picked at run time by GCC's function multiversioning
 // (an ifunc; target_clones cannot give its clones different bodies).
-template <bool avx2>
+void windowsAvx2For(bool bgr, bool identity, const std::uint8_t* row, int width, const std::int32_t* firsts,
+                    const cv::Vec3f* weights, int count, const std::array<int, 3>& rgbOffset, const cv::Matx33f& m,
+                    std::array<float, kWindowSamples + 1>* out)
+{
+    auto run = [&](auto kernel) { kernel(row, width, firsts, weights, count, rgbOffset, m, out); };
+    if (bgr)
+        identity ? run(windowsAvx2<true, true>) : run(windowsAvx2<true, false>);
+    else
+        identity ? run(windowsAvx2<false, true>) : run(windowsAvx2<false, false>);
+}
+#endif
+
+// The kernel for the channel order and whether there is crosstalk.
 void windowsFor(bool bgr, bool identity, const std::uint8_t* row, int width, const std::int32_t* firsts,
                 const cv::Vec3f* weights, int count, const std::array<int, 3>& rgbOffset, const cv::Matx33f& m,
                 std::array<float, kWindowSamples + 1>* out)
 {
     auto run = [&](auto kernel) { kernel(row, width, firsts, weights, count, rgbOffset, m, out); };
-    if constexpr (avx2) {
-        if (bgr)
-            identity ? run(windowsAvx2<true, true>) : run(windowsAvx2<true, false>);
-        else
-            identity ? run(windowsAvx2<false, true>) : run(windowsAvx2<false, false>);
-    } else {
-        if (bgr)
-            identity ? run(windows<true, true>) : run(windows<true, false>);
-        else
-            identity ? run(windows<false, true>) : run(windows<false, false>);
-    }
+    if (bgr)
+        identity ? run(windows<true, true>) : run(windows<true, false>);
+    else
+        identity ? run(windows<false, true>) : run(windows<false, false>);
 }
 
+#if defined(__x86_64__)
 [[gnu::target("default")]] void windowsVersion(bool bgr, bool identity, const std::uint8_t* row, int width,
                                                const std::int32_t* firsts, const cv::Vec3f* weights, int count,
                                                const std::array<int, 3>& rgbOffset, const cv::Matx33f& m,
                                                std::array<float, kWindowSamples + 1>* out)
 {
-    windowsFor<false>(bgr, identity, row, width, firsts, weights, count, rgbOffset, m, out);
+    windowsFor(bgr, identity, row, width, firsts, weights, count, rgbOffset, m, out);
 }
 [[gnu::target("arch=x86-64-v3")]] void windowsVersion(bool bgr, bool identity, const std::uint8_t* row, int width,
                                                       const std::int32_t* firsts, const cv::Vec3f* weights, int count,
                                                       const std::array<int, 3>& rgbOffset, const cv::Matx33f& m,
                                                       std::array<float, kWindowSamples + 1>* out)
 {
-    windowsFor<true>(bgr, identity, row, width, firsts, weights, count, rgbOffset, m, out);
+    windowsAvx2For(bgr, identity, row, width, firsts, weights, count, rgbOffset, m, out);
 }
 [[gnu::target("arch=x86-64-v4")]] void windowsVersion(bool bgr, bool identity, const std::uint8_t* row, int width,
                                                       const std::int32_t* firsts, const cv::Vec3f* weights, int count,
                                                       const std::array<int, 3>& rgbOffset, const cv::Matx33f& m,
                                                       std::array<float, kWindowSamples + 1>* out)
 {
-    windowsFor<true>(bgr, identity, row, width, firsts, weights, count, rgbOffset, m, out);
+    windowsAvx2For(bgr, identity, row, width, firsts, weights, count, rgbOffset, m, out);
 }
 #endif
 
@@ -258,11 +266,7 @@ void projectedGradientWindows(const std::uint8_t* row, int width, const std::int
 #if defined(__x86_64__)
         windowsVersion(bgr, identity, row, width, firsts, weights, count, rgbOffset, m, out);
 #else
-        auto run = [&](auto kernel) { kernel(row, width, firsts, weights, count, rgbOffset, m, out); };
-        if (bgr)
-            identity ? run(windows<true, true>) : run(windows<true, false>);
-        else
-            identity ? run(windows<false, true>) : run(windows<false, false>);
+        windowsFor(bgr, identity, row, width, firsts, weights, count, rgbOffset, m, out);
 #endif
     } else
         for (int j = 0; j < count; ++j) clippedWindow(row, width, firsts[j], rgbOffset, m, weights[j], out[j].data());

@@ -42,14 +42,9 @@ std::uint64_t borderMask(const std::int32_t* a, const std::int32_t* b, int count
         const uint8x16_t differ = vbicq_u8(weights, equal16(at));
         return vaddv_u8(vget_low_u8(differ)) | static_cast<unsigned>(vaddv_u8(vget_high_u8(differ))) << 8;
     };
-    // A whole word: each byte's weight (its bit in its group of 8), summed
-    // per group of 8 by three pairwise adds: byte k of the result holds the
-    // bits of labels 8k to 8k + 7.
+    // A whole word by byteMask64 (simd.hpp) of the 64 labels' differences.
     auto differ64 = [&]() -> std::uint64_t {
-        const uint8x16_t x = vpaddq_u8(vbicq_u8(weights, equal16(0)), vbicq_u8(weights, equal16(16)));
-        const uint8x16_t y = vpaddq_u8(vbicq_u8(weights, equal16(32)), vbicq_u8(weights, equal16(48)));
-        const uint8x16_t xy = vpaddq_u8(x, y);
-        return vgetq_lane_u64(vreinterpretq_u64_u8(vpaddq_u8(xy, xy)), 0);
+        return byteMask64(vmvnq_u8(equal16(0)), vmvnq_u8(equal16(16)), vmvnq_u8(equal16(32)), vmvnq_u8(equal16(48)));
     };
 #else
     auto equal4 = [&](int at) {

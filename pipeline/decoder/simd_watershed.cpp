@@ -395,8 +395,8 @@ using Lanes8 = std::int32_t __attribute__((vector_size(32)));
 //   same mirrored: unsigned min, 0xffffffff shifted in from the right;
 // - the unresolved bits by a pass over the finished row, 64 labels per word:
 //   ld4 deinterleaves the labels' bytes, so its 4th register holds the 16
-//   top bytes (sign bits) in pixel order; the signs as bit weights and 3
-//   rounds of pairwise adds give the 64 bits (17 instructions per word, where
+//   top bytes (sign bits) in pixel order; byteMask64 (simd.hpp) makes the
+//   64 bits of four of them (17 instructions per word, where
 //   the per-block sign bits (cmlt, and, addv) and the word's or took 9 per 4).
 
 // value in byte k of lane k.
@@ -467,13 +467,12 @@ void upLeftNeon(const std::uint8_t* code, const std::int32_t* above, std::int32_
     }
 }
 
-// 16 labels' sign bits as bit weights: byte k of the 4th ld4 register is
-// label k's top byte.
-[[gnu::always_inline]] inline uint8x16_t signWeights(const std::int32_t* p)
+// 0xff in byte k where label k of the 16 at p is negative: byte k of the 4th
+// ld4 register is label k's top byte.
+[[gnu::always_inline]] inline uint8x16_t negativeBytes(const std::int32_t* p)
 {
     const uint8x16x4_t bytes = vld4q_u8(reinterpret_cast<const std::uint8_t*>(p));
-    const uint8x16_t weights = {1, 2, 4, 8, 16, 32, 64, 128, 1, 2, 4, 8, 16, 32, 64, 128};
-    return vandq_u8(vreinterpretq_u8_s8(vshrq_n_s8(vreinterpretq_s8_u8(bytes.val[3]), 7)), weights);
+    return vreinterpretq_u8_s8(vshrq_n_s8(vreinterpretq_s8_u8(bytes.val[3]), 7));
 }
 
 void sweepNeon(const std::uint8_t* code, const std::int32_t* above, std::int32_t* row, int width,
@@ -494,15 +493,15 @@ void sweepNeon(const std::uint8_t* code, const std::int32_t* above, std::int32_t
     }
     // The unresolved bits (negative labels), 64 per word, then 16, then 1.
     int x = 0;
-    for (; x + 64 <= width; x += 64) {
-        const uint8x16_t pairs = vpaddq_u8(vpaddq_u8(signWeights(row + x), signWeights(row + x + 16)),
-                                           vpaddq_u8(signWeights(row + x + 32), signWeights(row + x + 48)));
-        unresolved[x >> 6] = vgetq_lane_u64(vreinterpretq_u64_u8(vpaddq_u8(pairs, pairs)), 0);
-    }
+    for (; x + 64 <= width; x += 64)
+        unresolved[x >> 6] = byteMask64(negativeBytes(row + x), negativeBytes(row + x + 16),
+                                        negativeBytes(row + x + 32), negativeBytes(row + x + 48));
     if (x == width) return;
     std::uint64_t word = 0;
+    const uint8x16_t weights = {1, 2, 4, 8, 16, 32, 64, 128, 1, 2, 4, 8, 16, 32, 64, 128};  // as byteMask64's
     for (; x + 16 <= width; x += 16) {
-        const uint8x16_t w = signWeights(row + x), pairs = vpaddq_u8(w, w), quads = vpaddq_u8(pairs, pairs);
+        const uint8x16_t w = vandq_u8(negativeBytes(row + x), weights), pairs = vpaddq_u8(w, w),
+                         quads = vpaddq_u8(pairs, pairs);
         word |= std::uint64_t{vgetq_lane_u16(vreinterpretq_u16_u8(vpaddq_u8(quads, quads)), 0)} << (x & 63);
     }
     for (; x < width; ++x) word |= std::uint64_t{row[x] < 0} << (x & 63);

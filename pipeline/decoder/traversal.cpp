@@ -85,6 +85,16 @@ SymbolCode stripeSymbol(const StripePattern& pattern, int from, int to)
     return static_cast<SymbolCode>(up * symbol + !up * reversedSymbol(symbol));
 }
 
+// Whether stripe `here` has a neighbour beyond it at a path's left (right)
+// end; if so, symbol = the pattern symbol walking onto it.
+bool symbolBeyond(const StripePattern& pattern, int here, bool left, SymbolCode& symbol)
+{
+    const int next = here + (left ? -1 : 1);
+    if (next < 0 || next >= pattern.stripeCount()) return false;
+    symbol = stripeSymbol(pattern, here, next);
+    return true;
+}
+
 class Traversal {
 public:
     explicit Traversal(DecoderWorkspace& ws)
@@ -260,40 +270,6 @@ private:
     // them.
     static std::int32_t& deadSymbols(Region& r, bool left) { return left ? r.reference : r.tokens; }
 
-    // The symbols the first step of a search from a seed with `seedSymbol`
-    // needs at the left (right) end: those of the stripe edges left of
-    // (right of) each of its candidates' two stripes, each once, in the
-    // candidates' order, and all of them as a mask. Most searches end in
-    // their first step (780x580: 800 searches per decode, 850 steps), where
-    // the candidates are all of the symbol's, so these are the same for
-    // every seed with that symbol: worked out once per decode and symbol,
-    // on the first such seed, not per search over some 20 candidates.
-    struct FirstStepSymbols {
-        std::array<SymbolCode, kSymbolCount> symbols;
-        int count = -1;  // -1: not worked out yet
-        std::uint32_t seen = 0;
-    };
-    std::array<std::array<FirstStepSymbols, 2>, kSymbolCount> firstStep_{};
-
-    const FirstStepSymbols& firstStepSymbols(SymbolCode seedSymbol, bool left)
-    {
-        FirstStepSymbols& first = firstStep_[seedSymbol][left];
-        if (first.count >= 0) return first;
-        const StripePattern& pattern = ws_.pattern;
-        first.count = 0;
-        for (int p : pattern.edgesWithSymbol(seedSymbol)) {
-            // The path is the candidate's two stripes p, p + 1.
-            const int stripeHere = left ? p : p + 1;
-            const int stripeNext = stripeHere + (left ? -1 : 1);
-            if (stripeNext < 0 || stripeNext >= pattern.stripeCount()) continue;
-            const SymbolCode symbol = stripeSymbol(pattern, stripeHere, stripeNext);
-            if (first.seen >> symbol & 1) continue;
-            first.symbols[first.count++] = symbol;
-            first.seen |= 1u << symbol;
-        }
-        return first;
-    }
-
     // Step 1. Returns true when the path was unique and its regions are assigned.
     bool findUniquePath(int seedEdge)
     {
@@ -338,9 +314,9 @@ private:
                 std::uint32_t seen = 0;
                 if (end - begin == 2) {
                     // The first step: the candidates are all of the seed
-                    // symbol's, whose symbols at this end are listed once
-                    // per decode (firstStepSymbols); less the dead ones.
-                    const FirstStepSymbols& first = firstStepSymbols(symbol, left);
+                    // symbol's, whose symbols at this end are listed at
+                    // start-up (ws.firstStep); less the dead ones.
+                    const DecoderWorkspace::FirstStepSymbols& first = ws_.firstStep[symbol][left];
                     for (int k = 0; k < first.count; ++k) {
                         needed[neededCount] = first.symbols[k];
                         neededCount += !(static_cast<std::uint32_t>(dead) >> first.symbols[k] & 1);
@@ -348,13 +324,12 @@ private:
                     seen = first.seen;
                 } else {
                     for (int c = 0; c < count; ++c) {
-                        const int stripeHere = ws_.candidates[c] + (left ? 0 : end - begin - 1);
-                        const int stripeNext = stripeHere + (left ? -1 : 1);
-                        if (stripeNext < 0 || stripeNext >= pattern.stripeCount()) continue;
-                        const SymbolCode symbol = stripeSymbol(pattern, stripeHere, stripeNext);
-                        needed[neededCount] = symbol;
-                        neededCount += !((seen | static_cast<std::uint32_t>(dead)) >> symbol & 1);
-                        seen |= 1u << symbol;
+                        SymbolCode beyond;
+                        if (!symbolBeyond(pattern, ws_.candidates[c] + (left ? 0 : end - begin - 1), left, beyond))
+                            continue;
+                        needed[neededCount] = beyond;
+                        neededCount += !((seen | static_cast<std::uint32_t>(dead)) >> beyond & 1);
+                        seen |= 1u << beyond;
                     }
                 }
                 if (neededCount == 0) continue;
@@ -388,10 +363,9 @@ private:
             if (bestRegion < 0) return fail();
             int kept = 0;
             for (int c = 0; c < count; ++c) {
-                const int stripeHere = ws_.candidates[c] + (bestLeft ? 0 : end - begin - 1);
-                const int stripeNext = stripeHere + (bestLeft ? -1 : 1);
-                if (stripeNext < 0 || stripeNext >= pattern.stripeCount()) continue;
-                if (stripeSymbol(pattern, stripeHere, stripeNext) == bestSymbol)
+                SymbolCode beyond;
+                if (symbolBeyond(pattern, ws_.candidates[c] + (bestLeft ? 0 : end - begin - 1), bestLeft, beyond) &&
+                    beyond == bestSymbol)
                     ws_.candidates[kept++] = ws_.candidates[c] - (bestLeft ? 1 : 0);
             }
             count = kept;
@@ -829,6 +803,23 @@ private:
 };
 
 }  // namespace
+
+void setFirstStepSymbols(DecoderWorkspace& ws)
+{
+    const StripePattern& pattern = ws.pattern;
+    for (int seedSymbol = 0; seedSymbol < kSymbolCount; ++seedSymbol)
+        for (bool left : {false, true}) {
+            DecoderWorkspace::FirstStepSymbols& first = ws.firstStep[seedSymbol][left];
+            first = {};
+            // A candidate p is the path on stripes p, p + 1.
+            for (int p : pattern.edgesWithSymbol(static_cast<SymbolCode>(seedSymbol))) {
+                SymbolCode beyond;
+                if (!symbolBeyond(pattern, left ? p : p + 1, left, beyond) || (first.seen >> beyond & 1)) continue;
+                first.symbols[first.count++] = beyond;
+                first.seen |= 1u << beyond;
+            }
+        }
+}
 
 void decodeStripes(DecoderWorkspace& ws) { Traversal(ws).run(); }
 

@@ -136,6 +136,19 @@ struct DecoderWorkspace {
     std::unique_ptr<std::int32_t[]> candidates;  // seeding: candidate pattern positions (edgeCount);
                                                  // depth: each edge's point in the current row
     std::unique_ptr<std::int32_t[]> pathVertices;  // seeding: the path, window + 1 regions
+    // Seeding: per seed symbol and path end (1: left, 0: right), the symbols
+    // the first step of a unique-path search needs there: those of the
+    // stripe edges beyond each of the symbol's pattern edges, each once, in
+    // the pattern's order, and all of them as a mask (traversal.cpp). Most
+    // searches end in their first step, whose candidates are all of the seed
+    // symbol's edges: these depend on the pattern alone, so they are listed
+    // at start-up (setFirstStepSymbols), not per search.
+    struct FirstStepSymbols {
+        std::array<SymbolCode, kSymbolCount> symbols{};
+        int count = 0;
+        std::uint32_t seen = 0;
+    };
+    std::array<std::array<FirstStepSymbols, 2>, kSymbolCount> firstStep{};
     std::unique_ptr<std::int32_t[]> componentSize;  // per pass (<= maxRegions)
 
     // Geometry.
@@ -204,6 +217,8 @@ void computeRegions(DecoderWorkspace& ws);
 void buildGraph(DecoderWorkspace& ws);
 void computeEdgeFeatures(DecoderWorkspace& ws);
 void decodeStripes(DecoderWorkspace& ws);
+// At start-up: ws.firstStep from ws.pattern (traversal.cpp).
+void setFirstStepSymbols(DecoderWorkspace& ws);
 void computePoints(DecoderWorkspace& ws);
 
 // Shared by the edge and traversal stages (eq. 4-7).

@@ -664,7 +664,7 @@ TEST(DecoderKernels, GraphMatchesReferenceForTinyAndZeroPrimaryComponents)
     // below 2^-124 (0.25 p or the product subnormal): those directions take
     // the unfolded kernels.
     const cv::Mat noise = randomFrame(97, 61, 12);
-    for (const cv::Vec2f primary : {cv::Vec2f(1.0f, 0.0f), cv::Vec2f(0.0f, -1.0f), cv::Vec2f(1.1e-38f, -3.3e-38f),
+    for (const cv::Vec2f& primary : {cv::Vec2f(1.0f, 0.0f), cv::Vec2f(0.0f, -1.0f), cv::Vec2f(1.1e-38f, -3.3e-38f),
                                     cv::Vec2f(-1.3e-39f, 2.9e-39f), cv::Vec2f(0x1p-124f, 0x1.8p-123f),
                                     cv::Vec2f(3e38f, 0.5f)}) {
         FloodCase c(noise, 97 * 61);
