@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <limits>
+#include <type_traits>
 
 #if defined(__ARM_NEON)
 #include <arm_neon.h>
@@ -205,33 +206,43 @@ template <bool bgr, bool identity>
     }
 }
 
-// The version per CPU, picked at run time by GCC's function multiversioning
-// (an ifunc; target_clones cannot give its clones different bodies).
-void windowsAvx2For(bool bgr, bool identity, const std::uint8_t* row, int width, const std::int32_t* firsts,
-                    const cv::Vec3f* weights, int count, const std::array<int, 3>& rgbOffset, const cv::Matx33f& m,
-                    std::array<float, kWindowSamples + 1>* out)
-{
-    auto run = [&](auto kernel) { kernel(row, width, firsts, weights, count, rgbOffset, m, out); };
-    if (bgr)
-        identity ? run(windowsAvx2<true, true>) : run(windowsAvx2<true, false>);
-    else
-        identity ? run(windowsAvx2<false, true>) : run(windowsAvx2<false, false>);
-}
 #endif
+
+// Calls run(bgr, identity) with the two as std::true_type / std::false_type,
+// so a kernel template takes them at compile time.
+template <typename Run>
+void withLayout(bool bgr, bool identity, Run run)
+{
+    using Yes = std::true_type;
+    using No = std::false_type;
+    if (bgr)
+        identity ? run(Yes{}, Yes{}) : run(Yes{}, No{});
+    else
+        identity ? run(No{}, Yes{}) : run(No{}, No{});
+}
 
 // The kernel for the channel order and whether there is crosstalk.
 void windowsFor(bool bgr, bool identity, const std::uint8_t* row, int width, const std::int32_t* firsts,
                 const cv::Vec3f* weights, int count, const std::array<int, 3>& rgbOffset, const cv::Matx33f& m,
                 std::array<float, kWindowSamples + 1>* out)
 {
-    auto run = [&](auto kernel) { kernel(row, width, firsts, weights, count, rgbOffset, m, out); };
-    if (bgr)
-        identity ? run(windows<true, true>) : run(windows<true, false>);
-    else
-        identity ? run(windows<false, true>) : run(windows<false, false>);
+    withLayout(bgr, identity, [&](auto b, auto i) {
+        windows<decltype(b)::value, decltype(i)::value>(row, width, firsts, weights, count, rgbOffset, m, out);
+    });
 }
 
 #if defined(__x86_64__)
+void windowsAvx2For(bool bgr, bool identity, const std::uint8_t* row, int width, const std::int32_t* firsts,
+                    const cv::Vec3f* weights, int count, const std::array<int, 3>& rgbOffset, const cv::Matx33f& m,
+                    std::array<float, kWindowSamples + 1>* out)
+{
+    withLayout(bgr, identity, [&](auto b, auto i) {
+        windowsAvx2<decltype(b)::value, decltype(i)::value>(row, width, firsts, weights, count, rgbOffset, m, out);
+    });
+}
+
+// The version per CPU, picked at run time by GCC's function multiversioning
+// (an ifunc; target_clones cannot give its clones different bodies).
 [[gnu::target("default")]] void windowsVersion(bool bgr, bool identity, const std::uint8_t* row, int width,
                                                const std::int32_t* firsts, const cv::Vec3f* weights, int count,
                                                const std::array<int, 3>& rgbOffset, const cv::Matx33f& m,
