@@ -9,6 +9,7 @@
 
 #include <opencv2/core.hpp>
 
+#include <cstdio>
 #include <memory>
 #include <thread>
 
@@ -109,43 +110,66 @@ TEST(SimButton, RealTimeWaitsForThePressAndWakesOnInterrupt)
 
 TEST(SimCamera, SeesTheLedStateDuringTheExposure)
 {
-    auto world = makeWorld();
-    sim::SimLight light(*world);
     // Back-to-back 20 ms exposures: frame n exposes [n * 20 ms, (n + 1) * 20 ms).
-    sim::SimCamera camera(*world, 20000);
-    ASSERT_TRUE(camera.configure(CameraConfig{780, 580, 20000, 1.0, 3}));
-    ASSERT_TRUE(camera.start());
+    // The LED goes on in the middle of the frame after a dark one: that frame
+    // is only partly lit and must not show stripes, the one after it must.
+    // The scenario needs this thread to run on time (the switch 10 ms inside
+    // its frame, each capture() before its frame ends); on a loaded machine
+    // the scheduler can miss that by tens of milliseconds, and the camera
+    // then rightly delivers other frames. Such an attempt is detected from
+    // the times the camera reports and run again on a fresh world: what is
+    // asserted is the camera's behaviour, not the scheduler's.
+    constexpr int kAttempts = 5;
+    int attempt = 0;
+    for (; attempt < kAttempts; ++attempt) {
+        auto world = makeWorld();
+        sim::SimLight light(*world);
+        sim::SimCamera camera(*world, 20000);
+        ASSERT_TRUE(camera.configure(CameraConfig{780, 580, 20000, 1.0, 3}));
+        ASSERT_TRUE(camera.start());
 
-    auto dark = camera.capture(200ms);
-    ASSERT_TRUE(dark.isOk()) << dark.message();
-    const double darkVariation = horizontalVariation(dark->view);
-    const std::uint64_t darkSequence = dark->sequence;
+        auto dark = camera.capture(200ms);
+        ASSERT_TRUE(dark.isOk()) << dark.message();
+        const double darkVariation = horizontalVariation(dark->view);
+        const std::uint64_t darkSequence = dark->sequence;
 
-    // Switch on in the middle of the next frame's exposure: that frame is
-    // only partly lit and must not show stripes.
-    sleepUntilNs(dark->timestampNs + 30'000'000);
-    ASSERT_TRUE(light.set(true));
-    EXPECT_TRUE(light.isOn());
-    const std::int64_t onAt = monotonicNs();
-    auto partly = camera.capture(200ms);
-    ASSERT_TRUE(partly.isOk());
-    EXPECT_EQ(partly->sequence, darkSequence + 1);
-    EXPECT_LT(partly->timestampNs, onAt);
-    EXPECT_NEAR(horizontalVariation(partly->view), darkVariation, 1e-9);
-    auto lit = camera.capture(200ms);
-    ASSERT_TRUE(lit.isOk());
-    EXPECT_EQ(lit->sequence, darkSequence + 2);
-    EXPECT_GE(lit->timestampNs, onAt);
-    EXPECT_GT(horizontalVariation(lit->view), 4 * darkVariation);
-    EXPECT_DOUBLE_EQ(lit->exposureUs, 20000);
-    EXPECT_EQ(camera.renderCount(), 2);  // both looks rendered once, at configure()
+        sleepUntilNs(dark->timestampNs + 30'000'000);
+        ASSERT_TRUE(light.set(true));
+        EXPECT_TRUE(light.isOn());
+        const std::int64_t onAt = monotonicNs();
+        auto partly = camera.capture(200ms);
+        ASSERT_TRUE(partly.isOk());
+        auto lit = camera.capture(200ms);
+        ASSERT_TRUE(lit.isOk());
+        ASSERT_TRUE(light.set(false));
 
-    ASSERT_TRUE(light.set(false));
-    const auto log = world->ledLog();
-    ASSERT_EQ(log.size(), 2u);
-    EXPECT_TRUE(log[0].on);
-    EXPECT_FALSE(log[1].on);
-    EXPECT_LE(log[0].timeNs, onAt);
+        // On time: the switch fell inside frame n + 1's exposure and both
+        // captures got the next frames.
+        const bool onTime = onAt < dark->timestampNs + 40'000'000 && partly->sequence == darkSequence + 1 &&
+                            lit->sequence == darkSequence + 2;
+        if (!onTime) {
+            std::printf("attempt %d: the scheduler missed the window (LED on %.1f ms into the dark frame, "
+                        "frames %llu and %llu after it); again\n",
+                        attempt + 1, static_cast<double>(onAt - dark->timestampNs) / 1e6,
+                        static_cast<unsigned long long>(partly->sequence - darkSequence),
+                        static_cast<unsigned long long>(lit->sequence - darkSequence));
+            continue;
+        }
+        EXPECT_LT(partly->timestampNs, onAt);
+        EXPECT_NEAR(horizontalVariation(partly->view), darkVariation, 1e-9);
+        EXPECT_GE(lit->timestampNs, onAt);
+        EXPECT_GT(horizontalVariation(lit->view), 4 * darkVariation);
+        EXPECT_DOUBLE_EQ(lit->exposureUs, 20000);
+        EXPECT_EQ(camera.renderCount(), 2);  // both looks rendered once, at configure()
+
+        const auto log = world->ledLog();
+        ASSERT_EQ(log.size(), 2u);
+        EXPECT_TRUE(log[0].on);
+        EXPECT_FALSE(log[1].on);
+        EXPECT_LE(log[0].timeNs, onAt);
+        break;
+    }
+    EXPECT_LT(attempt, kAttempts) << "the scheduler missed the 10 ms window in all " << kAttempts << " attempts";
 }
 
 TEST(SimCamera, SizeMismatchAndTimeouts)
