@@ -3,7 +3,8 @@
 #   cross/install-deps.sh host    native build, tests, benchmarks, plots, .deb packaging
 #   cross/install-deps.sh arm64   arm64 cross build and its tests under qemu
 #   cross/install-deps.sh rootfs  cross/make-rootfs.sh (flashable root file system)
-#   cross/install-deps.sh all     host + arm64 (what CI needs)
+#   cross/install-deps.sh armhf-compile  cross/check-armhf.sh (the 32-bit ARM compiler only)
+#   cross/install-deps.sh all     host + arm64 + armhf-compile (what CI needs)
 # Quick and silent when everything is installed: apt is only called for
 # what is missing. Runs as root, or through sudo otherwise.
 set -eu
@@ -24,12 +25,16 @@ ARM64_PACKAGES="
   libcamera-dev:arm64 libgpiod-dev:arm64 libpng-dev:arm64 libtiff-dev:arm64
   libgtest-dev:arm64 libgmock-dev:arm64 libbenchmark-dev:arm64
 "
+# The armhf cross compiler is an amd64 package: no :armhf index needed.
+ARMHF_COMPILE_PACKAGES="
+  g++-arm-linux-gnueabihf
+"
 ROOTFS_PACKAGES="
   mmdebstrap arch-test qemu-user-static binfmt-support uidmap e2fsprogs
 "
 
 usage() {
-	echo "usage: $0 host|arm64|rootfs|all" >&2
+	echo "usage: $0 host|arm64|armhf-compile|rootfs|all" >&2
 	exit 2
 }
 
@@ -37,8 +42,9 @@ usage() {
 case "$1" in
 host) wanted=$HOST_PACKAGES ;;
 arm64) wanted=$ARM64_PACKAGES ;;
+armhf-compile) wanted=$ARMHF_COMPILE_PACKAGES ;;
 rootfs) wanted=$ROOTFS_PACKAGES ;;
-all) wanted="$HOST_PACKAGES $ARM64_PACKAGES" ;;
+all) wanted="$HOST_PACKAGES $ARM64_PACKAGES $ARMHF_COMPILE_PACKAGES" ;;
 *) usage ;;
 esac
 

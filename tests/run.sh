@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Installs what the tests need (Debian packages), builds stria for the host
-# and for arm64, and runs the whole test suite on both (arm64 under
-# qemu-user). Idempotent; quick when nothing changed.
+# and for arm64, runs the whole test suite on both (arm64 under qemu-user),
+# and compiles the pipeline for 32-bit ARM (cross/check-armhf.sh).
+# Idempotent; quick when nothing changed.
 #
 #   tests/run.sh              host + arm64 (what CI runs)
 #   tests/run.sh --host-only  host only
@@ -35,6 +36,8 @@ ctest --preset host
 if [ "$host_only" = 0 ]; then
   step "arm64 build and tests under qemu-aarch64"
   cross/test-arm64.sh
+  step "32-bit ARM (armv7-a NEON): the pipeline compiles"
+  cross/check-armhf.sh
 fi
 
 step "all tests passed in $(( $(date +%s) - start )) s"

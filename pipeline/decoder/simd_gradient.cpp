@@ -34,6 +34,37 @@ inline void gradientPixel(const std::uint8_t* up, const std::uint8_t* row, const
 }
 
 #if defined(__ARM_NEON)
+// AArch64's *_high_* forms (one instruction on the upper halves); 32-bit NEON
+// (armv7-a) has none, so there the upper halves are taken by vget_high_u8 and
+// the narrowed halves joined by vcombine.
+[[gnu::always_inline]] inline uint16x8_t addlHigh(uint8x16_t a, uint8x16_t b)
+{
+#if defined(__aarch64__)
+    return vaddl_high_u8(a, b);
+#else
+    return vaddl_u8(vget_high_u8(a), vget_high_u8(b));
+#endif
+}
+
+[[gnu::always_inline]] inline uint16x8_t mlalHigh(uint16x8_t sum, uint8x16_t a, uint8x16_t b)
+{
+#if defined(__aarch64__)
+    return vmlal_high_u8(sum, a, b);
+#else
+    return vmlal_u8(sum, vget_high_u8(a), vget_high_u8(b));
+#endif
+}
+
+// (low + 1) / 2 and (high + 1) / 2 narrowed into one vector.
+[[gnu::always_inline]] inline uint8x16_t halveRoundedNarrow(uint16x8_t low, uint16x8_t high)
+{
+#if defined(__aarch64__)
+    return vrshrn_high_n_u16(vrshrn_n_u16(low, 1), high, 1);
+#else
+    return vcombine_u8(vrshrn_n_u16(low, 1), vrshrn_n_u16(high, 1));
+#endif
+}
+
 // 16 pixels from x: the three channels de-interleaved by vld3.
 inline void gradient16(const std::uint8_t* up, const std::uint8_t* row, const std::uint8_t* down, bool alongY, int x,
                        std::uint8_t* magnitude, AlongCounts& alongCounts)
@@ -55,8 +86,8 @@ inline void gradient16(const std::uint8_t* up, const std::uint8_t* row, const st
         return vabdq_u16(plus, minus);
     };
     auto sobelHigh = [&](uint8x16_t a1, uint8x16_t b1, uint8x16_t c1, uint8x16_t a0, uint8x16_t b0, uint8x16_t c0) {
-        const uint16x8_t plus = vmlal_high_u8(vaddl_high_u8(a1, c1), b1, two);
-        const uint16x8_t minus = vmlal_high_u8(vaddl_high_u8(a0, c0), b0, two);
+        const uint16x8_t plus = mlalHigh(addlHigh(a1, c1), b1, two);
+        const uint16x8_t minus = mlalHigh(addlHigh(a0, c0), b0, two);
         return vabdq_u16(plus, minus);
     };
     for (int c = 0; c < 3; ++c) {
@@ -73,7 +104,7 @@ inline void gradient16(const std::uint8_t* up, const std::uint8_t* row, const st
     }
     // (best + 1) / 2 <= 255 narrowed by rounding shifts (rshrn: one
     // instruction per 8 lanes).
-    vst1q_u8(magnitude + x, vrshrn_high_n_u16(vrshrn_n_u16(best[0], 1), best[1], 1));
+    vst1q_u8(magnitude + x, halveRoundedNarrow(best[0], best[1]));
     std::uint8_t along[16];
     vst1q_u8(along, vcombine_u8(vmovn_u16(bestAlong[0]), vmovn_u16(bestAlong[1])));
     for (int k = 0; k < 16; ++k) ++alongCounts[(x + k) & 3][along[k]];

@@ -26,8 +26,10 @@ std::uint64_t borderMask(const std::int32_t* a, const std::int32_t* b, int count
     // calls) in four steps with constant shifts; a shorter one in steps and
     // a last step of the 16 labels ending at count, which overlaps the step
     // before (the same bits again) instead of a label by label tail.
-#if defined(__ARM_NEON) || defined(__SSE2__)
-#if defined(__ARM_NEON)
+    // 32-bit ARM (armv7-a NEON) has none of uzp1, addv and byteMask64's
+    // AArch64 instructions: it takes the label by label loop.
+#if defined(__aarch64__) || defined(__SSE2__)
+#if defined(__aarch64__)
     const uint8x16_t weights = {1, 2, 4, 8, 16, 32, 64, 128, 1, 2, 4, 8, 16, 32, 64, 128};
     // 16 labels' comparisons as bytes (0xff: equal): the low bytes of the
     // 32-bit masks gathered by three uzp1 (even elements), in order (the
@@ -58,7 +60,7 @@ std::uint64_t borderMask(const std::int32_t* a, const std::int32_t* b, int count
         return static_cast<unsigned>(~_mm_movemask_epi8(equal) & 0xffff);
     };
 #endif
-#if defined(__ARM_NEON)
+#if defined(__aarch64__)
     if (count == 64) return differ64();
 #else
     if (count == 64) return differ16(0) | differ16(16) << 16 | differ16(32) << 32 | differ16(48) << 48;
