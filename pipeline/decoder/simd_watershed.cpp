@@ -9,7 +9,7 @@
 #if defined(__ARM_NEON)
 #include <arm_neon.h>
 #elif defined(__x86_64__)
-#include <xmmintrin.h>
+#include <immintrin.h>
 #endif
 
 namespace stria::pipeline {
@@ -240,14 +240,24 @@ template <int last, bool blend, typename V>
 #endif
 }
 
-// Bit i set if lane i of v is negative (kUnresolved): on x86-64 by SSE
-// movmskps, the sign bits of 4 lanes (an AVX one could not be inlined into
-// this template, compiled for the baseline; GCC's own lane-by-lane reduction
-// of a compare took 20 instructions).
+#if defined(__x86_64__)
+[[gnu::target("avx")]] inline unsigned signBits8(__m256 v) { return static_cast<unsigned>(_mm256_movemask_ps(v)); }
+#endif
+
+// Bit i set if lane i of v is negative (kUnresolved): on x86-64 by
+// movmskps, the sign bits of the lanes (GCC's own lane-by-lane reduction of a
+// compare took 20 instructions). 8 lanes (the AVX2 and AVX-512 versions): one
+// vmovmskps of all 8, where two SSE ones of the halves took 6 instructions
+// with the extract and the or. (The builtin, not _mm256_movemask_ps: an AVX
+// intrinsic could not be inlined into this template, compiled for the
+// baseline; the builtin is expanded only where the template is inlined, in
+// the AVX versions.)
 template <typename V>
 [[gnu::always_inline]] inline std::uint64_t negativeBits(V v)
 {
 #if defined(__x86_64__)
+    if constexpr (kLanes<V> == 8)
+        return signBits8(reinterpret_cast<__m256>(v));
     std::uint64_t bits = 0;
     for (int i = 0; i < kLanes<V>; i += 4) {
         __m128 quarter;
@@ -327,7 +337,8 @@ template <typename V, bool blend = false>
         unresolved[x >> 6] |= std::uint64_t{next < 0} << (x & 63);
     }
     V carry = V{} + next;
-    for (int x = blocks - n; x >= 0; x -= n) {
+    // (x as std::ptrdiff_t: its word index without a sign extension per block.)
+    for (std::ptrdiff_t x = blocks - n; x >= 0; x -= n) {
         V v = load<V>(row + x);
         V m = arrowsIn(codesOf<V>(code + x), kDescentRight);
         scanStep<-1>(v, m);
