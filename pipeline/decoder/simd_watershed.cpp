@@ -111,8 +111,8 @@ constexpr std::uint8_t kArrowBits = 0xff & ~kPlateauArrow & ~kMinimumArrow;
 // Four labels or lane masks, in GCC's vector extensions: one source for the
 // SSE2 and (32-bit ARM) NEON instructions (shuffles, compares, and/or). The x86-64-v3/v4
 // versions of the sweeps take eight (Lanes8, below): a block's prefix scan
-// in 3 steps instead of 2, but half the blocks, so half the steps of the
-// carry chain per row.
+// in 3 steps instead of 2 (resolveWithCarry), but half the blocks, so half
+// the steps of the carry chain per row.
 using Lanes = std::int32_t __attribute__((vector_size(16)));
 
 // The helpers below take and return 8-lane vectors too: GCC warns that their
@@ -172,21 +172,32 @@ consteval V everyLane(int lane)
     return everyLane<V>(lane, std::make_integer_sequence<int, kLanes<V>>());
 }
 
+#if defined(__x86_64__)
+// The AVX helpers of the 8-lane sweeps below: not always_inline, as the
+// templates that call them are compiled for the baseline (an AVX intrinsic
+// could not be inlined there); GCC inlines them into the AVX versions that
+// inline the templates. (__builtin_convertvector made 40 instructions of
+// lane inserts of zeroExtend8.)
+[[gnu::target("avx2")]] inline __m256i zeroExtend8(const std::uint8_t* p)
+{
+    return _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(p)));
+}
+[[gnu::target("avx")]] inline unsigned signBits8(__m256 v) { return static_cast<unsigned>(_mm256_movemask_ps(v)); }
+#endif
+
 // The codes of a block of 4 in each lane (byte k = pixel k, the next 4 in
 // the next 4 lanes): lane k's byte k % 4 is pixel k's code, so one
 // and-compare per direction gives the lane masks, without widening the bytes.
-// (8 lanes: the 8 bytes broadcast, then lanes 0-3 take dword 0 and lanes
-// 4-7 dword 1: vpbroadcastq and vpermd, where the loop below took 6.)
+// 8 lanes (AVX2, AVX-512): lane k is pixel k's code, zero-extended by one
+// vpmovzxbd (the codes in lane k's byte k % 4, as for 4 lanes, took a
+// vpbroadcastq and a vpermd more).
 template <typename V>
 [[gnu::always_inline]] inline V codesOf(const std::uint8_t* code)
 {
     static_assert(std::endian::native == std::endian::little, "byte k of the word is pixel k");
-    if constexpr (kLanes<V> == 8) {
-        std::int64_t eight;
-        std::memcpy(&eight, code, sizeof eight);
-        using Quads = std::int64_t __attribute__((vector_size(32)));
-        return __builtin_shuffle(reinterpret_cast<V>(Quads{} + eight), V{0, 0, 0, 0, 1, 1, 1, 1});
-    }
+#if defined(__x86_64__)
+    if constexpr (kLanes<V> == 8) return reinterpret_cast<V>(zeroExtend8(code));
+#endif
     V v;
     for (int i = 0; i < kLanes<V>; i += 4) {
         std::int32_t c;
@@ -202,32 +213,26 @@ template <typename V>
 {
     constexpr auto byteK = [](std::uint32_t value) {
         V v{};
-        for (int i = 0; i < kLanes<V>; ++i) v[i] = static_cast<std::int32_t>(value << (8 * (i % 4)));
+        for (int i = 0; i < kLanes<V>; ++i)
+            v[i] = static_cast<std::int32_t>(kLanes<V> == 8 ? value : value << (8 * (i % 4)));
         return v;
     };
     return (codes & byteK(kArrowBits)) == byteK(direction);
 }
 
-// Stores v with carry in the lanes of m and returns the label the next block
-// takes, lane `last` of the stored block in every lane. The chain from block
-// to block is this carry alone. On x86-64 it is (carry & m's last lane) |
-// (own's last lane), the broadcasts off the chain: one vpternlogd in the
-// AVX-512 version (watershed 1.37 -> 1.21 ms at 780x580), where a select then
-// a broadcast took 3 dependent instructions. On other targets (32-bit ARM: a
-// vbsl then a dup) the select then the broadcast; arm64 has its own sweeps
-// (sweepNeon, below). The AVX2 version (blend)
-// takes the select then the broadcast too: one vblendvps and one vpermd,
-// where the and-or took 7 instructions (no vpternlogd).
+// 4 lanes: stores v with carry in the lanes of m and returns the label the
+// next block takes, lane `last` of the stored block in every lane. The chain
+// from block to block is this carry alone. On x86-64 (SSE2) it is (carry &
+// m's last lane) | (own's last lane), the broadcasts off the chain (in the
+// AVX-512 version, before it took resolveWithCarry, one vpternlogd: watershed
+// 1.37 -> 1.21 ms at 780x580, where a select then a broadcast took 3
+// dependent instructions). On other targets (32-bit ARM: a vbsl then a dup)
+// the select then the broadcast; arm64 has its own sweeps (sweepNeon, below).
 // (stored: the block as stored, for the unresolved mask of the last sweep.)
-template <int last, bool blend, typename V>
+template <int last, typename V>
 [[gnu::always_inline]] inline V storeWithCarry(std::int32_t* out, V m, V v, V carry, V& stored)
 {
     constexpr V lastLane = everyLane<V>(last);
-    if constexpr (blend) {
-        stored = select(m, carry, v);
-        store(out, stored);
-        return __builtin_shuffle(stored, lastLane);
-    }
 #if defined(__x86_64__)
     const V own = v & ~m;
     stored = own | (carry & m);
@@ -239,10 +244,6 @@ template <int last, bool blend, typename V>
     return __builtin_shuffle(stored, lastLane);
 #endif
 }
-
-#if defined(__x86_64__)
-[[gnu::target("avx")]] inline unsigned signBits8(__m256 v) { return static_cast<unsigned>(_mm256_movemask_ps(v)); }
-#endif
 
 // Bit i set if lane i of v is negative (kUnresolved): on x86-64 by
 // movmskps, the sign bits of the lanes (GCC's own lane-by-lane reduction of a
@@ -284,13 +285,51 @@ template <int shift, typename V>
     m &= __builtin_shuffle(m, index);
 }
 
+// 8 lanes (the AVX2 and AVX-512 versions): a block's labels with the lanes
+// of mask m copying their left neighbour's (right: their right neighbour's)
+// as it is by then, and the carry (the label beyond the block, in every lane)
+// where the copies lead out of the block, in one permute: each lane holds its
+// own index, or -1 where its mask is set; a prefix maximum over the lanes (3
+// shuffle and max steps, a lane beyond the block: the lane itself) gives each
+// the index of the nearest lane at or left of it that keeps its own label, -1
+// where there is none; vpermd takes that lane's label (index -1: lane 7's,
+// replaced) and a select on the index's sign bit the carry. Right: indices
+// mirrored, an unsigned minimum (-1 the largest). 9 instructions, where the 3
+// scanSteps and storeWithCarry's select took 13 (scalar reference: the second
+// loop of sweepRowUpLeftReference, the third of sweepRowReference).
+template <int shift, typename V>
+[[gnu::always_inline]] inline V prefixStep(V s)
+{
+    using Index = decltype(s < s);  // V's lanes as signed integers
+    const V other = __builtin_shuffle(s, shifted<Index>(shift));
+    if constexpr (shift > 0)
+        return other > s ? other : s;
+    else
+        return other < s ? other : s;
+}
+
+template <bool right, typename V>
+[[gnu::always_inline]] inline V resolveWithCarry(V v, V m, V carry)
+{
+    static_assert(kLanes<V> == 8);
+    V source = m | shifted<V>(0);  // lane i: i, or -1 where it copies
+    if constexpr (right) {
+        using Unsigned = std::uint32_t __attribute__((vector_size(32)));
+        const Unsigned u = prefixStep<-4>(prefixStep<-2>(prefixStep<-1>(reinterpret_cast<Unsigned>(source))));
+        source = reinterpret_cast<V>(u);
+    } else {
+        source = prefixStep<4>(prefixStep<2>(prefixStep<1>(source)));
+    }
+    return source < 0 ? carry : __builtin_shuffle(v, source);
+}
+
 // A pixel copying its neighbour's label after the neighbour's own copy is a
 // serial chain: as selects per pixel, 3 dependent instructions each. Here a
 // block resolves its runs by a prefix scan in log2(lanes) shuffle steps (lane
 // i takes lane i - 1, then i - 2, ..., while its mask is set), and only the
 // lanes that copy from beyond the block (their mask still set) take the
-// previous block's label (storeWithCarry, blend as there).
-template <typename V, bool blend = false>
+// previous block's label (storeWithCarry); 8 lanes by resolveWithCarry.
+template <typename V>
 [[gnu::always_inline]] inline void upLeftLanes(const std::uint8_t* code, const std::int32_t* above, std::int32_t* row,
                                                int width)
 {
@@ -301,11 +340,16 @@ template <typename V, bool blend = false>
         const V codes = codesOf<V>(code + x);
         V v = select(arrowsIn(codes, kDescentUp), load<V>(above + x), load<V>(row + x));
         V m = arrowsIn(codes, kDescentLeft);
-        scanStep<1>(v, m);
-        scanStep<2>(v, m);
-        if constexpr (n == 8) scanStep<4>(v, m);
-        V stored;
-        carry = storeWithCarry<n - 1, blend>(row + x, m, v, carry, stored);
+        if constexpr (n == 8) {
+            const V stored = resolveWithCarry<false>(v, m, carry);
+            store(row + x, stored);
+            carry = __builtin_shuffle(stored, everyLane<V>(n - 1));
+        } else {
+            scanStep<1>(v, m);
+            scanStep<2>(v, m);
+            V stored;
+            carry = storeWithCarry<n - 1>(row + x, m, v, carry, stored);
+        }
     }
     std::int32_t previous = carry[0];
     for (int x = blocks; x < width; ++x) {
@@ -322,11 +366,11 @@ template <typename V, bool blend = false>
 // the watershed, whose path leads down), as each block is final when stored:
 // sign-bit masks, where a pass of 16-label compares over the row took 4 times
 // more instructions.
-template <typename V, bool blend = false>
+template <typename V>
 [[gnu::always_inline]] inline void sweepLanes(const std::uint8_t* code, const std::int32_t* above, std::int32_t* row,
                                               int width, std::uint64_t* unresolved)
 {
-    upLeftLanes<V, blend>(code, above, row, width);
+    upLeftLanes<V>(code, above, row, width);
     constexpr int n = kLanes<V>;
     const int blocks = width & ~(n - 1);
     for (int k = 0; k < (width + 63) / 64; ++k) unresolved[k] = 0;
@@ -341,11 +385,16 @@ template <typename V, bool blend = false>
     for (std::ptrdiff_t x = blocks - n; x >= 0; x -= n) {
         V v = load<V>(row + x);
         V m = arrowsIn(codesOf<V>(code + x), kDescentRight);
-        scanStep<-1>(v, m);
-        scanStep<-2>(v, m);
-        if constexpr (n == 8) scanStep<-4>(v, m);
         V stored;
-        carry = storeWithCarry<0, blend>(row + x, m, v, carry, stored);
+        if constexpr (n == 8) {
+            stored = resolveWithCarry<true>(v, m, carry);
+            store(row + x, stored);
+            carry = __builtin_shuffle(stored, everyLane<V>(0));
+        } else {
+            scanStep<-1>(v, m);
+            scanStep<-2>(v, m);
+            carry = storeWithCarry<0>(row + x, m, v, carry, stored);
+        }
         // Blocks of 4 or 8 at multiples of their size: never across a word.
         unresolved[x >> 6] |= negativeBits(stored) << (x & 63);
     }
@@ -364,7 +413,7 @@ using Lanes8 = std::int32_t __attribute__((vector_size(32)));
 [[gnu::target("arch=x86-64-v3")]] void upLeftVersion(const std::uint8_t* c, const std::int32_t* a, std::int32_t* r,
                                                       int w)
 {
-    upLeftLanes<Lanes8, true>(c, a, r, w);
+    upLeftLanes<Lanes8>(c, a, r, w);
 }
 [[gnu::target("arch=x86-64-v4")]] void upLeftVersion(const std::uint8_t* c, const std::int32_t* a, std::int32_t* r,
                                                       int w)
@@ -379,7 +428,7 @@ using Lanes8 = std::int32_t __attribute__((vector_size(32)));
 [[gnu::target("arch=x86-64-v3")]] void sweepVersion(const std::uint8_t* c, const std::int32_t* a, std::int32_t* r,
                                                      int w, std::uint64_t* u)
 {
-    sweepLanes<Lanes8, true>(c, a, r, w, u);
+    sweepLanes<Lanes8>(c, a, r, w, u);
 }
 [[gnu::target("arch=x86-64-v4")]] void sweepVersion(const std::uint8_t* c, const std::int32_t* a, std::int32_t* r,
                                                      int w, std::uint64_t* u)
