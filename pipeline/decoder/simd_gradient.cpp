@@ -65,9 +65,11 @@ inline void gradientPixel(const std::uint8_t* up, const std::uint8_t* row, const
 #endif
 }
 
-// 16 pixels from x: the three channels de-interleaved by vld3.
+// 16 pixels from x: the three channels de-interleaved by vld3. Pixels x +
+// from to x + 15 are counted in the histogram (from > 0: a row's last block,
+// over pixels done already).
 inline void gradient16(const std::uint8_t* up, const std::uint8_t* row, const std::uint8_t* down, bool alongY, int x,
-                       std::uint8_t* magnitude, AlongCounts& alongCounts)
+                       std::uint8_t* magnitude, AlongCounts& alongCounts, int from = 0)
 {
     const uint8x16x3_t ul = vld3q_u8(up + 3 * (x - 1)), uh = vld3q_u8(up + 3 * x), ur = vld3q_u8(up + 3 * (x + 1));
     const uint8x16x3_t rl = vld3q_u8(row + 3 * (x - 1)), rr = vld3q_u8(row + 3 * (x + 1));
@@ -107,7 +109,7 @@ inline void gradient16(const std::uint8_t* up, const std::uint8_t* row, const st
     vst1q_u8(magnitude + x, halveRoundedNarrow(best[0], best[1]));
     std::uint8_t along[16];
     vst1q_u8(along, vcombine_u8(vmovn_u16(bestAlong[0]), vmovn_u16(bestAlong[1])));
-    for (int k = 0; k < 16; ++k) ++alongCounts[(x + k) & 3][along[k]];
+    for (int k = from; k < 16; ++k) ++alongCounts[(x + k) & 3][along[k]];
 }
 #elif defined(__SSE2__)
 // The maximum over the three channels of 16 pixels of interleaved bytes:
@@ -139,6 +141,16 @@ inline void store16(std::int16_t* p, __m128i v)
 {
     _mm_storeu_si128(reinterpret_cast<__m128i*>(p), v);
 }
+
+// |v| / 4 of 8 int16 lanes (|v| <= 1020). As a GCC vector expression, not
+// intrinsics: SSE2 has no pabsw (GCC makes a subtraction from 0 and a
+// pmaxsw), the AVX2 and AVX-512 clones of gradientRow do (one vpabsw).
+inline __m128i absQuarter(__m128i v)
+{
+    using Int16x8 = std::int16_t __attribute__((vector_size(16)));
+    const Int16x8 w = reinterpret_cast<Int16x8>(v);
+    return _mm_srli_epi16(reinterpret_cast<__m128i>(w < 0 ? -w : w), 2);
+}
 #endif
 
 }  // namespace
@@ -161,6 +173,12 @@ STRIA_X86_CLONES void gradientRow(const std::uint8_t* up, const std::uint8_t* ro
     int x = 1;
 #if defined(__ARM_NEON)
     for (; x + 16 < width; x += 16) gradient16(up, row, down, alongY, x, magnitude, alongCounts);
+    // The pixels left before the last one by a last block ending at pixel
+    // width - 2 (as on SSE2, below), where they took gradientPixel each.
+    if (x < width - 1 && width >= 18) {
+        gradient16(up, row, down, alongY, width - 17, magnitude, alongCounts, x - (width - 17));
+        x = width - 1;
+    }
 #else
     // Per byte lane i (pixel i / 3, channel i % 3) of the interior pixels,
     // in SSE2 (the scalar loops are the SSE2 loops' reference and tails;
@@ -207,8 +225,8 @@ STRIA_X86_CLONES void gradientRow(const std::uint8_t* up, const std::uint8_t* ro
             const __m128i v = load16(vertical + j);
             const __m128i dy = _mm_add_epi16(_mm_add_epi16(load16(vertical + j - 3), load16(vertical + j + 3)),
                                              _mm_add_epi16(v, v));
-            gx[h] = _mm_srli_epi16(_mm_max_epi16(dx, _mm_sub_epi16(_mm_setzero_si128(), dx)), 2);
-            gy[h] = _mm_srli_epi16(_mm_max_epi16(dy, _mm_sub_epi16(_mm_setzero_si128(), dy)), 2);
+            gx[h] = absQuarter(dx);
+            gy[h] = absQuarter(dy);
         }
         half = _mm_packus_epi16(_mm_avg_epu16(gx[0], gy[0]), _mm_avg_epu16(gx[1], gy[1]));
         along = alongY ? _mm_packus_epi16(gy[0], gy[1]) : _mm_packus_epi16(gx[0], gx[1]);
@@ -216,15 +234,29 @@ STRIA_X86_CLONES void gradientRow(const std::uint8_t* up, const std::uint8_t* ro
     // The along maxima pass through the byte lanes' memory, unused in this
     // loop (GCC would extract each byte of a local array by a store of all).
     std::uint8_t* along = halfSum;
-    for (; x + 16 < width; x += 16) {
+    const auto block = [&](int x) {
         __m128i h[3], a[3];
         for (int c = 0; c < 3; ++c) lanes16(3 * x + 16 * c, h[c], a[c]);
         _mm_storeu_si128(reinterpret_cast<__m128i*>(magnitude + x), channelMax(h[0], h[1], h[2]));
         _mm_storeu_si128(reinterpret_cast<__m128i*>(along), channelMax(a[0], a[1], a[2]));
+    };
+    for (; x + 16 < width; x += 16) {
+        block(x);
         // x = 1 mod 16, so each pixel's histogram copy is a constant.
         for (int k = 0; k < 16; ++k) ++alongCounts[(1 + k) & 3][along[k]];
     }
+    // The pixels left before the last one (1 to 15 of them) by a last block
+    // ending at pixel width - 2, over pixels done already (the same
+    // magnitudes again), counting only the new ones, where the lane loop and
+    // the pixel loop below took about 4 times the instructions.
+    if (x < width - 1 && width >= 18) {
+        const int last = width - 17;
+        block(last);
+        for (int k = x - last; k < 16; ++k) ++alongCounts[(last + k) & 3][along[k]];
+        x = width - 1;
+    }
 #endif
+    // (With SSE2: on rows narrower than 18 pixels only.)
     for (i = 3 * x; i < bytes - 3; ++i) {
         const std::int16_t dx = static_cast<std::int16_t>(smooth[i + 3] - smooth[i - 3]);
         const std::int16_t dy = static_cast<std::int16_t>(vertical[i - 3] + 2 * vertical[i] + vertical[i + 3]);
