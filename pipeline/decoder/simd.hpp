@@ -18,10 +18,10 @@
 
 // x86-64 builds target SSE2; the hottest kernels are also compiled for
 // x86-64-v3 (AVX2) and -v4 (AVX-512), and the loader picks the best the CPU
-// has (an ifunc per kernel): gradientRow as clones of one body
-// (STRIA_X86_CLONES on its definition), the watershed sweeps as one
-// definition per target (simd_watershed.cpp: their AVX bodies take 8 labels
-// per block, not 4). Integer lanes: the same results on each. 780x580 stage
+// has (an ifunc per kernel): gradientRow as one definition per target of one
+// body (simd_gradient.cpp: the AVX versions split the channels by byte
+// shuffles), the watershed sweeps as one definition per target
+// (simd_watershed.cpp: their AVX bodies take 8 labels per block, not 4). Integer lanes: the same results on each. 780x580 stage
 // medians: watershed 1.33 -> 1.21 ms by the AVX-512 clones' one-instruction
 // selects (vpternlogd) with the carry of storeWithCarry, then -0.03-0.05 ms
 // by the 8-label blocks; gradient 0.44 -> 0.42 (the region medians: no

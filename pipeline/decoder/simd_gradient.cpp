@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cstdlib>
+#include <utility>
 
 #if defined(__ARM_NEON)
 #include <arm_neon.h>
@@ -112,12 +113,49 @@ inline void gradient16(const std::uint8_t* up, const std::uint8_t* row, const st
     for (int k = from; k < 16; ++k) ++alongCounts[(x + k) & 3][along[k]];
 }
 #elif defined(__SSE2__)
-// The maximum over the three channels of 16 pixels of interleaved bytes:
-// each round interleaves the low halves of (a, high half of b), (high half of
-// a, c), (b, high half of c); after 4 rounds a vector holds one channel (the
-// de-interleave of OpenCV's SSE2 v_load_deinterleave).
-inline __m128i channelMax(__m128i a, __m128i b, __m128i c)
+using Bytes16 = std::int8_t __attribute__((vector_size(16)));
+
+// Byte j: -1 where byte j of source k holds channel ch (a, b, c: k = 0, 1,
+// 2), else 0; byte p: the index of pixel p's channel ch in a vector of the
+// bytes of channel ch (channelOf, below).
+template <int ch, int k, int... j>
+consteval Bytes16 sourceMask(std::integer_sequence<int, j...>)
 {
+    return Bytes16{static_cast<std::int8_t>(((ch - j) % 3 + 3) % 3 == k ? -1 : 0)...};
+}
+
+template <int ch, int... p>
+consteval Bytes16 pixelOrder(std::integer_sequence<int, p...>)
+{
+    return Bytes16{static_cast<std::int8_t>((3 * p + ch) % 16)...};
+}
+
+// Channel ch of 16 pixels of interleaved bytes a, b, c, in pixel order: byte
+// j of a, b and c is byte j, 16 + j and 32 + j of the 48, of three different
+// channels (16 = 1 mod 3), so two blends gather the channel's 16 bytes into
+// one vector and one byte shuffle puts them in pixel order (SSE4.1 pblendvb
+// and SSSE3 pshufb: GCC's vector extensions, not intrinsics, as this is
+// compiled for the baseline and inlined into the AVX versions).
+template <int ch>
+[[gnu::always_inline]] inline __m128i channelOf(__m128i a, __m128i b, __m128i c)
+{
+    constexpr auto j = std::make_integer_sequence<int, 16>();
+    const Bytes16 ab = sourceMask<ch, 1>(j) ? reinterpret_cast<Bytes16>(b) : reinterpret_cast<Bytes16>(a);
+    const Bytes16 abc = sourceMask<ch, 2>(j) ? reinterpret_cast<Bytes16>(c) : ab;
+    return reinterpret_cast<__m128i>(__builtin_shuffle(abc, pixelOrder<ch>(j)));
+}
+
+// The maximum over the three channels of 16 pixels of interleaved bytes.
+// SSE2 (no byte shuffle): each round interleaves the low halves of (a, high
+// half of b), (high half of a, c), (b, high half of c); after 4 rounds a
+// vector holds one channel (the de-interleave of OpenCV's SSE2
+// v_load_deinterleave). shuffles (AVX2, AVX-512): by channelOf, 3
+// instructions per channel where the rounds took 8.
+template <bool shuffles>
+[[gnu::always_inline]] inline __m128i channelMax(__m128i a, __m128i b, __m128i c)
+{
+    if constexpr (shuffles)
+        return _mm_max_epu8(_mm_max_epu8(channelOf<0>(a, b, c), channelOf<1>(a, b, c)), channelOf<2>(a, b, c));
     for (int round = 0; round < 4; ++round) {
         const __m128i na = _mm_unpacklo_epi8(a, _mm_unpackhi_epi64(b, b));
         const __m128i nb = _mm_unpacklo_epi8(_mm_unpackhi_epi64(a, a), c);
@@ -161,9 +199,15 @@ void gradientRowReference(const std::uint8_t* up, const std::uint8_t* row, const
     for (int x = 0; x < width; ++x) gradientPixel(up, row, down, width, alongY, x, magnitude, alongCounts);
 }
 
-STRIA_X86_CLONES void gradientRow(const std::uint8_t* up, const std::uint8_t* row, const std::uint8_t* down, int width,
-                                  bool alongY, std::uint8_t* magnitude, AlongCounts& alongCounts,
-                                  [[maybe_unused]] std::int16_t* lanes)
+namespace {
+
+// gradientRow's body; shuffles: channelMax by byte blends and shuffles (x86-64
+// AVX2 and AVX-512 versions).
+template <bool shuffles>
+[[gnu::always_inline]] inline void gradientRowBody(const std::uint8_t* up, const std::uint8_t* row,
+                                                   const std::uint8_t* down, int width, bool alongY,
+                                                   std::uint8_t* magnitude, AlongCounts& alongCounts,
+                                                   [[maybe_unused]] std::int16_t* lanes)
 {
     if (width < 3) {
         gradientRowReference(up, row, down, width, alongY, magnitude, alongCounts);
@@ -237,8 +281,8 @@ STRIA_X86_CLONES void gradientRow(const std::uint8_t* up, const std::uint8_t* ro
     const auto block = [&](int x) {
         __m128i h[3], a[3];
         for (int c = 0; c < 3; ++c) lanes16(3 * x + 16 * c, h[c], a[c]);
-        _mm_storeu_si128(reinterpret_cast<__m128i*>(magnitude + x), channelMax(h[0], h[1], h[2]));
-        _mm_storeu_si128(reinterpret_cast<__m128i*>(along), channelMax(a[0], a[1], a[2]));
+        _mm_storeu_si128(reinterpret_cast<__m128i*>(magnitude + x), channelMax<shuffles>(h[0], h[1], h[2]));
+        _mm_storeu_si128(reinterpret_cast<__m128i*>(along), channelMax<shuffles>(a[0], a[1], a[2]));
     };
     for (; x + 16 < width; x += 16) {
         block(x);
@@ -272,6 +316,45 @@ STRIA_X86_CLONES void gradientRow(const std::uint8_t* up, const std::uint8_t* ro
     }
 #endif
     for (; x < width; ++x) gradientPixel(up, row, down, width, alongY, x, magnitude, alongCounts);
+}
+
+#if defined(__x86_64__)
+// One definition per target (GCC's function multiversioning, an ifunc; as
+// target_clones, but the AVX versions take channelMax's shuffles, which SSE2
+// lacks).
+[[gnu::target("default")]] void gradientRowVersion(const std::uint8_t* up, const std::uint8_t* row,
+                                                   const std::uint8_t* down, int width, bool alongY,
+                                                   std::uint8_t* magnitude, AlongCounts& alongCounts,
+                                                   std::int16_t* lanes)
+{
+    gradientRowBody<false>(up, row, down, width, alongY, magnitude, alongCounts, lanes);
+}
+[[gnu::target("arch=x86-64-v3")]] void gradientRowVersion(const std::uint8_t* up, const std::uint8_t* row,
+                                                          const std::uint8_t* down, int width, bool alongY,
+                                                          std::uint8_t* magnitude, AlongCounts& alongCounts,
+                                                          std::int16_t* lanes)
+{
+    gradientRowBody<true>(up, row, down, width, alongY, magnitude, alongCounts, lanes);
+}
+[[gnu::target("arch=x86-64-v4")]] void gradientRowVersion(const std::uint8_t* up, const std::uint8_t* row,
+                                                          const std::uint8_t* down, int width, bool alongY,
+                                                          std::uint8_t* magnitude, AlongCounts& alongCounts,
+                                                          std::int16_t* lanes)
+{
+    gradientRowBody<true>(up, row, down, width, alongY, magnitude, alongCounts, lanes);
+}
+#endif
+
+}  // namespace
+
+void gradientRow(const std::uint8_t* up, const std::uint8_t* row, const std::uint8_t* down, int width, bool alongY,
+                 std::uint8_t* magnitude, AlongCounts& alongCounts, std::int16_t* lanes)
+{
+#if defined(__x86_64__)
+    gradientRowVersion(up, row, down, width, alongY, magnitude, alongCounts, lanes);
+#else
+    gradientRowBody<false>(up, row, down, width, alongY, magnitude, alongCounts, lanes);
+#endif
 }
 
 }  // namespace stria::pipeline
