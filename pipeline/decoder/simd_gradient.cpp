@@ -3,12 +3,13 @@
 
 #include <algorithm>
 #include <cstdlib>
+#include <type_traits>
 #include <utility>
 
 #if defined(__ARM_NEON)
 #include <arm_neon.h>
 #elif defined(__SSE2__)
-#include <emmintrin.h>
+#include <immintrin.h>
 #endif
 
 namespace stria::pipeline {
@@ -180,6 +181,20 @@ inline void store16(std::int16_t* p, __m128i v)
     _mm_storeu_si128(reinterpret_cast<__m128i*>(p), v);
 }
 
+// The sums of gradientRow's first loop for 16 byte lanes, in int16 lanes
+// widened by vpmovzxbw (SSE2: by unpacks, in two halves). Not always_inline:
+// its AVX2 intrinsics could not be inlined into gradientRowBody, compiled
+// for the baseline; GCC inlines it into the AVX versions, which inline that.
+[[gnu::target("avx2")]] inline void smoothVertical16(const std::uint8_t* up, const std::uint8_t* row,
+                                                     const std::uint8_t* down, std::int16_t* smooth,
+                                                     std::int16_t* vertical)
+{
+    const __m256i u = _mm256_cvtepu8_epi16(load8(up)), r = _mm256_cvtepu8_epi16(load8(row)),
+                  d = _mm256_cvtepu8_epi16(load8(down));
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(smooth), _mm256_add_epi16(_mm256_add_epi16(u, d), _mm256_add_epi16(r, r)));
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(vertical), _mm256_sub_epi16(d, u));
+}
+
 // |v| / 4 of 8 int16 lanes (|v| <= 1020). As a GCC vector expression, not
 // intrinsics: SSE2 has no pabsw (GCC makes a subtraction from 0 and a
 // pmaxsw), the AVX2 and AVX-512 clones of gradientRow do (one vpabsw).
@@ -238,6 +253,9 @@ template <bool shuffles>
     int i = 0;
 #if defined(__SSE2__)
     // As the loop below, each row loaded once (GCC loaded up and down twice).
+    // The AVX versions: by smoothVertical16 (half the instructions).
+    if constexpr (shuffles)
+        for (; i + 16 <= bytes; i += 16) smoothVertical16(up + i, row + i, down + i, smooth + i, vertical + i);
     for (; i + 16 <= bytes; i += 16) {
         const __m128i zero = _mm_setzero_si128();
         const __m128i u = load8(up + i), r = load8(row + i), d = load8(down + i);
@@ -261,7 +279,9 @@ template <bool shuffles>
     // (GCC masks each value it packs), then split into their channels in
     // registers (instead of a running maximum over three lanes and a scalar
     // pick of every third: 0.54 -> 0.45 ms at 780x580 with the loop above).
-    const auto lanes16 = [&](int i, __m128i& half, __m128i& along) {
+    // (alongY as a constant of each instantiation of blocks, below: a branch
+    // per lanes16 with both packs took 3 instructions more.)
+    const auto lanes16 = [&](auto alongYConstant, int i, __m128i& half, __m128i& along) {
         __m128i gx[2], gy[2];
         for (int h = 0; h < 2; ++h) {
             const int j = i + 8 * h;
@@ -273,32 +293,38 @@ template <bool shuffles>
             gy[h] = absQuarter(dy);
         }
         half = _mm_packus_epi16(_mm_avg_epu16(gx[0], gy[0]), _mm_avg_epu16(gx[1], gy[1]));
-        along = alongY ? _mm_packus_epi16(gy[0], gy[1]) : _mm_packus_epi16(gx[0], gx[1]);
+        along = decltype(alongYConstant)::value ? _mm_packus_epi16(gy[0], gy[1]) : _mm_packus_epi16(gx[0], gx[1]);
     };
     // The along maxima pass through the byte lanes' memory, unused in this
     // loop (GCC would extract each byte of a local array by a store of all).
     std::uint8_t* along = halfSum;
-    const auto block = [&](int x) {
-        __m128i h[3], a[3];
-        for (int c = 0; c < 3; ++c) lanes16(3 * x + 16 * c, h[c], a[c]);
-        _mm_storeu_si128(reinterpret_cast<__m128i*>(magnitude + x), channelMax<shuffles>(h[0], h[1], h[2]));
-        _mm_storeu_si128(reinterpret_cast<__m128i*>(along), channelMax<shuffles>(a[0], a[1], a[2]));
+    const auto blocks = [&](auto alongYConstant) {
+        const auto block = [&](int x) {
+            __m128i h[3], a[3];
+            for (int c = 0; c < 3; ++c) lanes16(alongYConstant, 3 * x + 16 * c, h[c], a[c]);
+            _mm_storeu_si128(reinterpret_cast<__m128i*>(magnitude + x), channelMax<shuffles>(h[0], h[1], h[2]));
+            _mm_storeu_si128(reinterpret_cast<__m128i*>(along), channelMax<shuffles>(a[0], a[1], a[2]));
+        };
+        for (; x + 16 < width; x += 16) {
+            block(x);
+            // x = 1 mod 16, so each pixel's histogram copy is a constant.
+            for (int k = 0; k < 16; ++k) ++alongCounts[(1 + k) & 3][along[k]];
+        }
+        // The pixels left before the last one (1 to 15 of them) by a last
+        // block ending at pixel width - 2, over pixels done already (the same
+        // magnitudes again), counting only the new ones, where the lane loop
+        // and the pixel loop below took about 4 times the instructions.
+        if (x < width - 1 && width >= 18) {
+            const int last = width - 17;
+            block(last);
+            for (int k = x - last; k < 16; ++k) ++alongCounts[(last + k) & 3][along[k]];
+            x = width - 1;
+        }
     };
-    for (; x + 16 < width; x += 16) {
-        block(x);
-        // x = 1 mod 16, so each pixel's histogram copy is a constant.
-        for (int k = 0; k < 16; ++k) ++alongCounts[(1 + k) & 3][along[k]];
-    }
-    // The pixels left before the last one (1 to 15 of them) by a last block
-    // ending at pixel width - 2, over pixels done already (the same
-    // magnitudes again), counting only the new ones, where the lane loop and
-    // the pixel loop below took about 4 times the instructions.
-    if (x < width - 1 && width >= 18) {
-        const int last = width - 17;
-        block(last);
-        for (int k = x - last; k < 16; ++k) ++alongCounts[(last + k) & 3][along[k]];
-        x = width - 1;
-    }
+    if (alongY)
+        blocks(std::true_type{});
+    else
+        blocks(std::false_type{});
 #endif
     // (With SSE2: on rows narrower than 18 pixels only.)
     for (i = 3 * x; i < bytes - 3; ++i) {
