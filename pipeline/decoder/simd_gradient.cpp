@@ -114,49 +114,13 @@ inline void gradient16(const std::uint8_t* up, const std::uint8_t* row, const st
     for (int k = from; k < 16; ++k) ++alongCounts[(x + k) & 3][along[k]];
 }
 #elif defined(__SSE2__)
-using Bytes16 = std::int8_t __attribute__((vector_size(16)));
-
-// Byte j: -1 where byte j of source k holds channel ch (a, b, c: k = 0, 1,
-// 2), else 0; byte p: the index of pixel p's channel ch in a vector of the
-// bytes of channel ch (channelOf, below).
-template <int ch, int k, int... j>
-consteval Bytes16 sourceMask(std::integer_sequence<int, j...>)
+// The maximum over the three channels of 16 pixels of interleaved bytes
+// (SSE2: no byte shuffle; the AVX versions take channelOf, below): each round
+// interleaves the low halves of (a, high half of b), (high half of a, c), (b,
+// high half of c); after 4 rounds a vector holds one channel (the
+// de-interleave of OpenCV's SSE2 v_load_deinterleave).
+inline __m128i channelMax(__m128i a, __m128i b, __m128i c)
 {
-    return Bytes16{static_cast<std::int8_t>(((ch - j) % 3 + 3) % 3 == k ? -1 : 0)...};
-}
-
-template <int ch, int... p>
-consteval Bytes16 pixelOrder(std::integer_sequence<int, p...>)
-{
-    return Bytes16{static_cast<std::int8_t>((3 * p + ch) % 16)...};
-}
-
-// Channel ch of 16 pixels of interleaved bytes a, b, c, in pixel order: byte
-// j of a, b and c is byte j, 16 + j and 32 + j of the 48, of three different
-// channels (16 = 1 mod 3), so two blends gather the channel's 16 bytes into
-// one vector and one byte shuffle puts them in pixel order (SSE4.1 pblendvb
-// and SSSE3 pshufb: GCC's vector extensions, not intrinsics, as this is
-// compiled for the baseline and inlined into the AVX versions).
-template <int ch>
-[[gnu::always_inline]] inline __m128i channelOf(__m128i a, __m128i b, __m128i c)
-{
-    constexpr auto j = std::make_integer_sequence<int, 16>();
-    const Bytes16 ab = sourceMask<ch, 1>(j) ? reinterpret_cast<Bytes16>(b) : reinterpret_cast<Bytes16>(a);
-    const Bytes16 abc = sourceMask<ch, 2>(j) ? reinterpret_cast<Bytes16>(c) : ab;
-    return reinterpret_cast<__m128i>(__builtin_shuffle(abc, pixelOrder<ch>(j)));
-}
-
-// The maximum over the three channels of 16 pixels of interleaved bytes.
-// SSE2 (no byte shuffle): each round interleaves the low halves of (a, high
-// half of b), (high half of a, c), (b, high half of c); after 4 rounds a
-// vector holds one channel (the de-interleave of OpenCV's SSE2
-// v_load_deinterleave). shuffles (AVX2, AVX-512): by channelOf, 3
-// instructions per channel where the rounds took 8.
-template <bool shuffles>
-[[gnu::always_inline]] inline __m128i channelMax(__m128i a, __m128i b, __m128i c)
-{
-    if constexpr (shuffles)
-        return _mm_max_epu8(_mm_max_epu8(channelOf<0>(a, b, c), channelOf<1>(a, b, c)), channelOf<2>(a, b, c));
     for (int round = 0; round < 4; ++round) {
         const __m128i na = _mm_unpacklo_epi8(a, _mm_unpackhi_epi64(b, b));
         const __m128i nb = _mm_unpacklo_epi8(_mm_unpackhi_epi64(a, a), c);
@@ -195,26 +159,73 @@ inline void store16(std::int16_t* p, __m128i v)
     _mm256_storeu_si256(reinterpret_cast<__m256i*>(vertical), _mm256_sub_epi16(d, u));
 }
 
-// The AVX versions' lanes16 (gradientRow, below; not always_inline, as
-// smoothVertical16): the same in 16 int16 lanes per register, then packed
-// from its two halves (a 16-pixel block 139 -> 110 instructions).
+// The AVX versions' 16-pixel blocks (gradientRow's block, below; not
+// always_inline, as smoothVertical16): lanes16 in one register of 16 int16
+// lanes (two of 8 in SSE2), packed into [magnitude halves | along] bytes;
+// then the maximum over the channels of both at once, in 32 byte lanes, by
+// channelOf (3 instructions per channel, where channelMax's rounds took 8
+// per 16 bytes). A block 139 -> 94 instructions.
+// (Constants in 32-byte vectors, for the AVX versions only.)
+#pragma GCC diagnostic ignored "-Wpsabi"
+using Bytes32 = std::int8_t __attribute__((vector_size(32)));
+
+// Byte j: -1 where byte j % 16 of source k holds channel ch (a, b, c: k = 0,
+// 1, 2), else 0; byte p: the index of pixel p % 16's channel ch in 16 bytes
+// of channel ch (channelOf, below).
+template <int ch, int k, int... j>
+consteval Bytes32 sourceMask(std::integer_sequence<int, j...>)
+{
+    return Bytes32{static_cast<std::int8_t>(((ch - j % 16) % 3 + 3) % 3 == k ? -1 : 0)...};
+}
+
+template <int ch, int... p>
+consteval Bytes32 pixelOrder(std::integer_sequence<int, p...>)
+{
+    return Bytes32{static_cast<std::int8_t>((3 * (p % 16) + ch) % 16)...};
+}
+
 template <bool alongY>
-[[gnu::target("avx2")]] inline void lanes16Avx2(const std::int16_t* smooth, const std::int16_t* vertical, int i,
-                                                __m128i& half, __m128i& along)
+[[gnu::target("avx2")]] inline __m256i lanes16Avx2(const std::int16_t* smooth, const std::int16_t* vertical, int i)
 {
     // (No lambdas: they would not take the target.)
-    const auto* t = reinterpret_cast<const __m256i*>(vertical + i);
     const __m256i dx = _mm256_sub_epi16(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(smooth + i + 3)),
                                         _mm256_loadu_si256(reinterpret_cast<const __m256i*>(smooth + i - 3)));
-    const __m256i v = _mm256_loadu_si256(t);
+    const __m256i v = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(vertical + i));
     const __m256i dy =
         _mm256_add_epi16(_mm256_add_epi16(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(vertical + i - 3)),
                                           _mm256_loadu_si256(reinterpret_cast<const __m256i*>(vertical + i + 3))),
                          _mm256_add_epi16(v, v));
     const __m256i gx = _mm256_srli_epi16(_mm256_abs_epi16(dx), 2), gy = _mm256_srli_epi16(_mm256_abs_epi16(dy), 2);
-    const __m256i sum = _mm256_avg_epu16(gx, gy), chosen = alongY ? gy : gx;
-    half = _mm_packus_epi16(_mm256_castsi256_si128(sum), _mm256_extracti128_si256(sum, 1));
-    along = _mm_packus_epi16(_mm256_castsi256_si128(chosen), _mm256_extracti128_si256(chosen, 1));
+    // Quadwords: halves of lanes 0-7, along of 0-7, halves of 8-15, along
+    // of 8-15; reordered 0, 2, 1, 3.
+    const __m256i packed = _mm256_packus_epi16(_mm256_avg_epu16(gx, gy), alongY ? gy : gx);
+    return _mm256_permute4x64_epi64(packed, 0xd8);
+}
+
+// Channel ch of 16 pixels of interleaved bytes a, b, c, in pixel order (in
+// each 16-byte half, the two halves alike): byte j of a, b and c is byte j,
+// 16 + j and 32 + j of the 48, of three different channels (16 = 1 mod 3),
+// so two blends (vpblendvb) gather the channel's 16 bytes into one vector
+// and one byte shuffle (vpshufb) puts them in pixel order.
+template <int ch>
+[[gnu::target("avx2")]] inline __m256i channelOf(__m256i a, __m256i b, __m256i c)
+{
+    constexpr auto j = std::make_integer_sequence<int, 32>();
+    const __m256i ab = _mm256_blendv_epi8(a, b, reinterpret_cast<__m256i>(sourceMask<ch, 1>(j)));
+    const __m256i abc = _mm256_blendv_epi8(ab, c, reinterpret_cast<__m256i>(sourceMask<ch, 2>(j)));
+    return _mm256_shuffle_epi8(abc, reinterpret_cast<__m256i>(pixelOrder<ch>(j)));
+}
+
+template <bool alongY>
+[[gnu::target("avx2")]] inline void block16Avx2(const std::int16_t* smooth, const std::int16_t* vertical, int x,
+                                                std::uint8_t* magnitude, std::uint8_t* along)
+{
+    const __m256i a = lanes16Avx2<alongY>(smooth, vertical, 3 * x), b = lanes16Avx2<alongY>(smooth, vertical, 3 * x + 16),
+                  c = lanes16Avx2<alongY>(smooth, vertical, 3 * x + 32);
+    const __m256i m =
+        _mm256_max_epu8(_mm256_max_epu8(channelOf<0>(a, b, c), channelOf<1>(a, b, c)), channelOf<2>(a, b, c));
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(magnitude + x), _mm256_castsi256_si128(m));
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(along), _mm256_extracti128_si256(m, 1));
 }
 
 // |v| / 4 of 8 int16 lanes (|v| <= 1020). As a GCC vector expression, not
@@ -238,8 +249,8 @@ void gradientRowReference(const std::uint8_t* up, const std::uint8_t* row, const
 
 namespace {
 
-// gradientRow's body; shuffles: channelMax by byte blends and shuffles (x86-64
-// AVX2 and AVX-512 versions).
+// gradientRow's body; shuffles: the 16-pixel blocks by block16Avx2 and its
+// byte shuffles (x86-64 AVX2 and AVX-512 versions).
 template <bool shuffles>
 [[gnu::always_inline]] inline void gradientRowBody(const std::uint8_t* up, const std::uint8_t* row,
                                                    const std::uint8_t* down, int width, bool alongY,
@@ -304,10 +315,6 @@ template <bool shuffles>
     // (alongY as a constant of each instantiation of blocks, below: a branch
     // per lanes16 with both packs took 3 instructions more.)
     const auto lanes16 = [&](auto alongYConstant, int i, __m128i& half, __m128i& along) {
-        if constexpr (shuffles) {
-            lanes16Avx2<decltype(alongYConstant)::value>(smooth, vertical, i, half, along);
-            return;
-        }
         __m128i gx[2], gy[2];
         for (int h = 0; h < 2; ++h) {
             const int j = i + 8 * h;
@@ -326,10 +333,14 @@ template <bool shuffles>
     std::uint8_t* along = halfSum;
     const auto blocks = [&](auto alongYConstant) {
         const auto block = [&](int x) {
-            __m128i h[3], a[3];
-            for (int c = 0; c < 3; ++c) lanes16(alongYConstant, 3 * x + 16 * c, h[c], a[c]);
-            _mm_storeu_si128(reinterpret_cast<__m128i*>(magnitude + x), channelMax<shuffles>(h[0], h[1], h[2]));
-            _mm_storeu_si128(reinterpret_cast<__m128i*>(along), channelMax<shuffles>(a[0], a[1], a[2]));
+            if constexpr (shuffles) {
+                block16Avx2<decltype(alongYConstant)::value>(smooth, vertical, x, magnitude, along);
+            } else {
+                __m128i h[3], a[3];
+                for (int c = 0; c < 3; ++c) lanes16(alongYConstant, 3 * x + 16 * c, h[c], a[c]);
+                _mm_storeu_si128(reinterpret_cast<__m128i*>(magnitude + x), channelMax(h[0], h[1], h[2]));
+                _mm_storeu_si128(reinterpret_cast<__m128i*>(along), channelMax(a[0], a[1], a[2]));
+            }
         };
         for (; x + 16 < width; x += 16) {
             block(x);
@@ -372,9 +383,8 @@ template <bool shuffles>
 
 #if defined(__x86_64__)
 // One definition per target (GCC's function multiversioning, an ifunc; as
-// target_clones, but the AVX versions take channelMax's shuffles, which SSE2
-// lacks, and the AVX2 helpers, which only flatten inlines: GCC left
-// lanes16Avx2 a call).
+// target_clones, but the AVX versions take byte shuffles, which SSE2 lacks,
+// and AVX2 helpers, which only flatten inlines: GCC left some a call).
 [[gnu::target("default")]] void gradientRowVersion(const std::uint8_t* up, const std::uint8_t* row,
                                                    const std::uint8_t* down, int width, bool alongY,
                                                    std::uint8_t* magnitude, AlongCounts& alongCounts,
