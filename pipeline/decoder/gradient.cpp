@@ -17,7 +17,9 @@
 
 namespace stria::pipeline {
 
-void computeGradient(DecoderWorkspace& ws)
+// (x86-64: clones for AVX2 and AVX-512 too, STRIA_X86_CLONES: the floor's
+// select below in 32 or 64 bytes per step.)
+STRIA_X86_CLONES void computeGradient(DecoderWorkspace& ws)
 {
     const int w = ws.width, h = ws.height;
     // Along the stripes: image y when the primary direction is closer to x.
