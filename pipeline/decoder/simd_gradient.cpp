@@ -287,8 +287,17 @@ template <bool shuffles>
 #if defined(__SSE2__)
     // As the loop below, each row loaded once (GCC loaded up and down twice).
     // The AVX versions: by smoothVertical16 (half the instructions).
-    if constexpr (shuffles)
-        for (; i + 16 <= bytes; i += 16) smoothVertical16(up + i, row + i, down + i, smooth + i, vertical + i);
+    // (Two per step: the loop took 3 of the 12 instructions per 16 bytes.)
+    if constexpr (shuffles) {
+        for (; i + 32 <= bytes; i += 32) {
+            smoothVertical16(up + i, row + i, down + i, smooth + i, vertical + i);
+            smoothVertical16(up + i + 16, row + i + 16, down + i + 16, smooth + i + 16, vertical + i + 16);
+        }
+        if (i + 16 <= bytes) {
+            smoothVertical16(up + i, row + i, down + i, smooth + i, vertical + i);
+            i += 16;
+        }
+    }
     for (; i + 16 <= bytes; i += 16) {
         const __m128i zero = _mm_setzero_si128();
         const __m128i u = load8(up + i), r = load8(row + i), d = load8(down + i);
