@@ -26,6 +26,7 @@
 // selects (vpternlogd) with the carry of storeWithCarry, then -0.03-0.05 ms
 // by the 8-label blocks; gradient 0.44 -> 0.42 (the region medians: no
 // faster). Since session 8 also: computeWatershed and descentRow as clones,
+// computeGradient (gradient.cpp: its floor select) as clones,
 // computePoints (depth.cpp) as clones, with
 // the edge sample windows as one definition per target (simd_edges.cpp: the
 // AVX2 body gathers a channel's 8 samples by vpshufb), and the region copy
