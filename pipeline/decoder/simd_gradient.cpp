@@ -155,7 +155,8 @@ inline void store16(std::int16_t* p, __m128i v)
 {
     const __m256i u = _mm256_cvtepu8_epi16(load8(up)), r = _mm256_cvtepu8_epi16(load8(row)),
                   d = _mm256_cvtepu8_epi16(load8(down));
-    _mm256_storeu_si256(reinterpret_cast<__m256i*>(smooth), _mm256_add_epi16(_mm256_add_epi16(u, d), _mm256_add_epi16(r, r)));
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(smooth),
+                        _mm256_add_epi16(_mm256_add_epi16(u, d), _mm256_add_epi16(r, r)));
     _mm256_storeu_si256(reinterpret_cast<__m256i*>(vertical), _mm256_sub_epi16(d, u));
 }
 
@@ -220,7 +221,8 @@ template <bool alongY>
 [[gnu::target("avx2")]] inline void block16Avx2(const std::int16_t* smooth, const std::int16_t* vertical, int x,
                                                 std::uint8_t* magnitude, std::uint8_t* along)
 {
-    const __m256i a = lanes16Avx2<alongY>(smooth, vertical, 3 * x), b = lanes16Avx2<alongY>(smooth, vertical, 3 * x + 16),
+    const __m256i a = lanes16Avx2<alongY>(smooth, vertical, 3 * x),
+                  b = lanes16Avx2<alongY>(smooth, vertical, 3 * x + 16),
                   c = lanes16Avx2<alongY>(smooth, vertical, 3 * x + 32);
     const __m256i m =
         _mm256_max_epu8(_mm256_max_epu8(channelOf<0>(a, b, c), channelOf<1>(a, b, c)), channelOf<2>(a, b, c));
@@ -228,9 +230,10 @@ template <bool alongY>
     _mm_storeu_si128(reinterpret_cast<__m128i*>(along), _mm256_extracti128_si256(m, 1));
 }
 
-// |v| / 4 of 8 int16 lanes (|v| <= 1020). As a GCC vector expression, not
-// intrinsics: SSE2 has no pabsw (GCC makes a subtraction from 0 and a
-// pmaxsw), the AVX2 and AVX-512 clones of gradientRow do (one vpabsw).
+// |v| / 4 of 8 int16 lanes (|v| <= 1020), in the SSE2 version. As a GCC
+// vector expression, not intrinsics: SSE2 has no pabsw (GCC makes a
+// subtraction from 0 and a pmaxsw); compiled for AVX it is one vpabsw (the
+// AVX versions take lanes16Avx2's).
 inline __m128i absQuarter(__m128i v)
 {
     using Int16x8 = std::int16_t __attribute__((vector_size(16)));
