@@ -100,13 +100,16 @@ void setKey(GraphEdge& edge, std::uint64_t key) { std::memcpy(&edge.a, &key, siz
 // buildGraph's hash table holds an edge's record as its offset in words
 // (3 e: a GraphEdge is 3 words), which addresses the record without a
 // multiply by 24 (x86-64: an index scaled by 8; AArch64: a shifted register).
+// The offsets as std::size_t in buildGraph's loop (64 bits on 64-bit
+// targets): no extension to 64 bits before each address (a 32-bit load from
+// the table zero-extends for free).
 static_assert(sizeof(GraphEdge) == 3 * sizeof(std::uint64_t));
-constexpr std::uint32_t kEdgeWords = 3;
-GraphEdge* recordAt(GraphEdge* edges, std::uint32_t words)
+constexpr std::size_t kEdgeWords = 3;
+GraphEdge* recordAt(GraphEdge* edges, std::size_t words)
 {
-    return reinterpret_cast<GraphEdge*>(reinterpret_cast<char*>(edges) + sizeof(std::uint64_t) * std::size_t{words});
+    return reinterpret_cast<GraphEdge*>(reinterpret_cast<char*>(edges) + sizeof(std::uint64_t) * words);
 }
-const GraphEdge* recordAt(const GraphEdge* edges, std::uint32_t words)
+const GraphEdge* recordAt(const GraphEdge* edges, std::size_t words)
 {
     return recordAt(const_cast<GraphEdge*>(edges), words);
 }
@@ -199,8 +202,8 @@ void buildGraph(DecoderWorkspace& ws)
     const EdgeTable lookup{table, tableSize, shift, edges};
     // The edges so far as words of records (kEdgeWords per edge, the
     // table's unit): edgeCount().
-    std::int32_t edgeWords = 0;
-    auto edgeCount = [&] { return edgeWords / static_cast<std::int32_t>(kEdgeWords); };
+    std::size_t edgeWords = 0;
+    auto edgeCount = [&] { return static_cast<std::int32_t>(edgeWords / kEdgeWords); };
     // Edge records are cleared ahead of the count, 64 at a time.
     constexpr std::int32_t kClearBlock = 64;
     std::int32_t cleared = 0;
@@ -237,10 +240,10 @@ void buildGraph(DecoderWorkspace& ws)
         // minimum a cmov with the signed count, a branch with an unsigned
         // one: check the mispredictions when changing it). The record's
         // other fields are only written once it is the pair's edge.
-        const auto next = static_cast<std::uint32_t>(edgeWords);
+        const std::size_t next = edgeWords;
         setKey(*recordAt(edges, next), key);
-        auto probe = [&] { return std::min(static_cast<std::uint32_t>(table[slot]), next); };
-        std::uint32_t e = probe();
+        auto probe = [&] { return std::min<std::size_t>(static_cast<std::uint32_t>(table[slot]), next); };
+        std::size_t e = probe();
         // A collision: about 1 look-up in 12 (the collision loop out of the
         // way of the first probe's: a jump less per pair).
         if (keyOf(*recordAt(edges, e)) != key) [[unlikely]] {
@@ -252,7 +255,7 @@ void buildGraph(DecoderWorkspace& ws)
         table[slot] = static_cast<std::int32_t>(e);
         // e <= next, new where equal: the next record is past e's then, and
         // else the same (a stored e is at most next - kEdgeWords).
-        edgeWords = static_cast<std::int32_t>(std::max(e + kEdgeWords, next));
+        edgeWords = std::max(e + kEdgeWords, next);
         if constexpr (checked) {
             if (edgeCount() >= cleared) [[unlikely]] clearAhead();  // every 64 new edges (none once full)
         }
@@ -313,11 +316,24 @@ void buildGraph(DecoderWorkspace& ws)
         const std::uint8_t* pixels = ws.frame.row(y);
         const std::uint8_t* down = ws.frame.row(std::min(y + 1, h - 1));
         const std::uint64_t* masks = ws.rowBorders + static_cast<std::ptrdiff_t>(y) * words;
+        // The pair loops address a word's labels and pixels from pointers
+        // to its column i0, set once per word: the column in the word
+        // (countr_zero) is the only index per pair, no add of i0 to it. The
+        // horizontal loop's pointers are hidden from GCC, which would
+        // otherwise fold them back into the row pointers and add i0 per pair
+        // again (the vertical loop keeps them without: a barrier there
+        // cost a spill).
         auto horizontalPairs = [&](std::size_t i0, std::uint64_t bits) {
+            const std::int32_t* rowAt = row + i0;
+            const std::uint8_t* upAt = up + 3 * i0;
+            const std::uint8_t* pixelsAt = pixels + 3 * i0;
+            const std::uint8_t* downAt = down + 3 * i0;
+            asm("" : "+r"(rowAt), "+r"(upAt), "+r"(pixelsAt), "+r"(downAt));
             for (; bits; bits &= bits - 1) {
-                const std::size_t x = i0 + static_cast<unsigned>(std::countr_zero(bits));
-                addPair(labelPair(row + x), true,
-                        graph_kernels::horizontalPair<kFolded>(up, pixels, down, x, kFolded ? horizontalWeights : plain),
+                const std::size_t x = static_cast<unsigned>(std::countr_zero(bits));
+                addPair(labelPair(rowAt + x), true,
+                        graph_kernels::horizontalPair<kFolded>(upAt, pixelsAt, downAt, x,
+                                                               kFolded ? horizontalWeights : plain),
                         checked);
             }
         };
@@ -335,11 +351,15 @@ void buildGraph(DecoderWorkspace& ws)
             // Columns 1 to w - 3.
             std::uint64_t first = ~std::uint64_t{1};
             for (int i0 = 0; i0 < w - 2; i0 += 64) {
-                const std::uint64_t mask = borderMask(row + i0, row + w + i0, std::min(64, w - 2 - i0)) & first;
+                const std::int32_t* rowAt = row + i0;
+                const std::int32_t* belowAt = rowAt + w;
+                const std::uint8_t* pixelsAt = pixels + 3 * static_cast<std::ptrdiff_t>(i0);
+                const std::uint8_t* downAt = down + 3 * static_cast<std::ptrdiff_t>(i0);
+                const std::uint64_t mask = borderMask(rowAt, belowAt, std::min(64, w - 2 - i0)) & first;
                 for (std::uint64_t bits = mask; bits; bits &= bits - 1) {
-                    const std::size_t x = static_cast<unsigned>(i0) + static_cast<unsigned>(std::countr_zero(bits));
-                    addPair(labelPair(row[x], row[x + w]), false,
-                            graph_kernels::verticalPair<kFolded>(pixels, down, x, kFolded ? verticalWeights : plain),
+                    const std::size_t x = static_cast<unsigned>(std::countr_zero(bits));
+                    addPair(labelPair(rowAt[x], belowAt[x]), false,
+                            graph_kernels::verticalPair<kFolded>(pixelsAt, downAt, x, kFolded ? verticalWeights : plain),
                             checked);
                 }
                 first = ~std::uint64_t{0};
