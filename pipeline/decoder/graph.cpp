@@ -317,29 +317,34 @@ void buildGraph(DecoderWorkspace& ws)
         const std::uint8_t* down = ws.frame.row(std::min(y + 1, h - 1));
         const std::uint64_t* masks = ws.rowBorders + static_cast<std::ptrdiff_t>(y) * words;
         // The pair loops address a word's labels and pixels from pointers
-        // to its column i0, set once per word: the column in the word
-        // (countr_zero) is the only index per pair, no add of i0 to it. The
-        // horizontal loop's pointers are hidden from GCC, which would
-        // otherwise fold them back into the row pointers and add i0 per pair
-        // again (the vertical loop keeps them without: a barrier there
-        // cost a spill).
-        auto horizontalPairs = [&](std::size_t i0, std::uint64_t bits) {
-            const std::int32_t* rowAt = row + i0;
-            const std::uint8_t* upAt = up + 3 * i0;
-            const std::uint8_t* pixelsAt = pixels + 3 * i0;
-            const std::uint8_t* downAt = down + 3 * i0;
-            asm("" : "+r"(rowAt), "+r"(upAt), "+r"(pixelsAt), "+r"(downAt));
-            for (; bits; bits &= bits - 1) {
-                const std::size_t x = static_cast<unsigned>(std::countr_zero(bits));
-                addPair(labelPair(rowAt + x), true,
-                        graph_kernels::horizontalPair<kFolded>(upAt, pixelsAt, downAt, x,
-                                                               kFolded ? horizontalWeights : plain),
-                        checked);
-            }
-        };
+        // to its column, set once per word: the column in the word
+        // (countr_zero) is the only index per pair, no add of the word's
+        // column to it. The horizontal loop's pointers are hidden from GCC
+        // (in place, so that they need no copies), which would otherwise fold
+        // them back into the row pointers and add the column per pair again
+        // (the vertical loop keeps them without: a barrier there cost a
+        // spill).
         if (lastH >= 0) {
-            for (int k = 0; k + 1 < words; ++k) horizontalPairs(64 * k, masks[k]);
-            horizontalPairs(64 * (words - 1), masks[words - 1] & ~lastHBit);
+            const std::int32_t* rowAt = row;
+            const std::uint8_t *upAt = up, *pixelsAt = pixels, *downAt = down;
+            auto horizontalPairs = [&](std::uint64_t bits) {
+                asm("" : "+r"(rowAt), "+r"(upAt), "+r"(pixelsAt), "+r"(downAt));
+                for (; bits; bits &= bits - 1) {
+                    const std::size_t x = static_cast<unsigned>(std::countr_zero(bits));
+                    addPair(labelPair(rowAt + x), true,
+                            graph_kernels::horizontalPair<kFolded>(upAt, pixelsAt, downAt, x,
+                                                                   kFolded ? horizontalWeights : plain),
+                            checked);
+                }
+            };
+            for (int k = 0; k + 1 < words; ++k) {
+                horizontalPairs(masks[k]);
+                rowAt += 64;
+                upAt += 3 * 64;
+                pixelsAt += 3 * 64;
+                downAt += 3 * 64;
+            }
+            horizontalPairs(masks[words - 1] & ~lastHBit);
             if (masks[words - 1] & lastHBit)
                 addPair(labelPair(row + lastH), true, pairGradient(ws.frame, lastH, y, true, primary), checked);
         }
@@ -355,7 +360,12 @@ void buildGraph(DecoderWorkspace& ws)
                 const std::int32_t* belowAt = rowAt + w;
                 const std::uint8_t* pixelsAt = pixels + 3 * static_cast<std::ptrdiff_t>(i0);
                 const std::uint8_t* downAt = down + 3 * static_cast<std::ptrdiff_t>(i0);
-                const std::uint64_t mask = borderMask(rowAt, belowAt, std::min(64, w - 2 - i0)) & first;
+                // A whole word (all but a row's last) by the inline kernel,
+                // its whole-word case only; the last one by the call.
+                const int count = w - 2 - i0;
+                const std::uint64_t mask = (count >= 64 ? graph_kernels::borderMask(rowAt, belowAt, 64)
+                                                        : borderMask(rowAt, belowAt, count)) &
+                                           first;
                 for (std::uint64_t bits = mask; bits; bits &= bits - 1) {
                     const std::size_t x = static_cast<unsigned>(std::countr_zero(bits));
                     addPair(labelPair(rowAt[x], belowAt[x]), false,

@@ -1,9 +1,10 @@
-// The region graph's pair kernels, inline (internal to the decoder: included
-// by graph.cpp, whose border-pair loop calls them per pair, and by
-// simd_graph.cpp, whose horizontalPairGradient / verticalPairGradient
-// (simd.hpp, tested against pairGradient) are these). Inline because a call
-// per border pair, with the constants set up again each time, cost 0.015 ms
-// at 780x580 and 0.04 ms at 1388x1038.
+// The region graph's pair kernels and border masks, inline (internal to the
+// decoder: included by graph.cpp, whose border-pair loop calls them per pair
+// and per 64 columns, and by simd_graph.cpp, whose horizontalPairGradient /
+// verticalPairGradient (simd.hpp, tested against pairGradient) and borderMask
+// (tested against borderMaskReference) are these). Inline because a call per
+// border pair, with the constants set up again each time, cost 0.015 ms at
+// 780x580 and 0.04 ms at 1388x1038.
 #pragma once
 
 #include "pipeline/decoder/simd.hpp"
@@ -113,6 +114,71 @@ inline PairGradient pairTerms(Floats gx, Floats gy, const PairWeights& w)
 }
 #endif
 
+// borderMask (simd.hpp): inline, so that the graph's vertical border loop
+// (graph.cpp) takes it without a call per 64 columns and its constants set up
+// again each time; the out-of-line borderMask, which the tests compare with
+// borderMaskReference, is this.
+[[gnu::always_inline]] inline std::uint64_t borderMask(const std::int32_t* a, const std::int32_t* b, int count)
+{
+    // 16 labels per step, no branch per pixel (a border every ~6 pixels is
+    // unpredictable); the caller walks the set bits. A whole word (most
+    // calls) in four steps with constant shifts; a shorter one in steps and
+    // a last step of the 16 labels ending at count, which overlaps the step
+    // before (the same bits again) instead of a label by label tail.
+    // 32-bit ARM (armv7-a NEON) has none of uzp1, addv and byteMask64's
+    // AArch64 instructions: it takes the label by label loop.
+#if defined(__aarch64__) || defined(__SSE2__)
+#if defined(__aarch64__)
+    const uint8x16_t weights = {1, 2, 4, 8, 16, 32, 64, 128, 1, 2, 4, 8, 16, 32, 64, 128};
+    // 16 labels' comparisons as bytes (0xff: equal): the low bytes of the
+    // 32-bit masks gathered by three uzp1 (even elements), in order (the
+    // narrowing moves took 6 instructions).
+    auto equal16 = [&](int at) {
+        auto equal4 = [&](int i) { return vreinterpretq_u16_u32(vceqq_s32(vld1q_s32(a + i), vld1q_s32(b + i))); };
+        const uint16x8_t low = vuzp1q_u16(equal4(at), equal4(at + 4));
+        const uint16x8_t high = vuzp1q_u16(equal4(at + 8), equal4(at + 12));
+        return vuzp1q_u8(vreinterpretq_u8_u16(low), vreinterpretq_u8_u16(high));
+    };
+    auto differ16 = [&](int at) -> std::uint64_t {
+        const uint8x16_t differ = vbicq_u8(weights, equal16(at));
+        return vaddv_u8(vget_low_u8(differ)) | static_cast<unsigned>(vaddv_u8(vget_high_u8(differ))) << 8;
+    };
+    // A whole word by byteMask64 (simd.hpp) of the 64 labels' differences.
+    auto differ64 = [&]() -> std::uint64_t {
+        return byteMask64(vmvnq_u8(equal16(0)), vmvnq_u8(equal16(16)), vmvnq_u8(equal16(32)), vmvnq_u8(equal16(48)));
+    };
+#else
+    auto equal4 = [&](int at) {
+        return _mm_cmpeq_epi32(_mm_loadu_si128(reinterpret_cast<const __m128i*>(a + at)),
+                               _mm_loadu_si128(reinterpret_cast<const __m128i*>(b + at)));
+    };
+    // 16 labels' equalities as bits (saturating packs keep the all-ones /
+    // zero lanes).
+    auto equal16 = [&](int at) -> std::uint64_t {
+        const __m128i equal = _mm_packs_epi16(_mm_packs_epi32(equal4(at), equal4(at + 4)),
+                                              _mm_packs_epi32(equal4(at + 8), equal4(at + 12)));
+        return static_cast<unsigned>(_mm_movemask_epi8(equal));
+    };
+    auto differ16 = [&](int at) -> std::uint64_t { return ~equal16(at) & 0xffff; };
+    // A whole word's equalities inverted once (the 16 bits' masks
+    // zero-extended: no masking each).
+    auto differ64 = [&]() -> std::uint64_t {
+        return ~(equal16(0) | equal16(16) << 16 | equal16(32) << 32 | equal16(48) << 48);
+    };
+#endif
+    if (count == 64) return differ64();
+    if (count >= 16) {
+        std::uint64_t bits = 0;
+        int i = 0;
+        for (; i + 16 <= count; i += 16) bits |= differ16(i) << i;
+        if (i < count) bits |= differ16(count - 16) << (count - 16);
+        return bits;
+    }
+#endif
+    std::uint64_t bits = 0;
+    for (int i = 0; i < count; ++i) bits |= std::uint64_t{a[i] != b[i]} << i;
+    return bits;
+}
 
 // kFolded: w are the folded weights (horizontalFoldedWeights /
 // verticalFoldedWeights), else plainWeights and the quarter taken here.
