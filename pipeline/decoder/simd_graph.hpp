@@ -60,12 +60,28 @@ inline bool quarterFolds(const cv::Vec2f& primary)
 #if defined(__ARM_NEON)
 using Int16s = int16x8_t;
 using Floats = float32x4_t;
-inline Int16s bytes8(const std::uint8_t* p) { return vreinterpretq_s16_u16(vmovl_u8(vld1_u8(p))); }
 inline Int16s nextPixel(Int16s v) { return vextq_s16(v, v, 3); }  // lanes 3.. to 0..
 inline Int16s plus(Int16s a, Int16s b) { return vaddq_s16(a, b); }
 inline Int16s minus(Int16s a, Int16s b) { return vsubq_s16(a, b); }
 inline Floats firstPixel(Int16s v) { return vcvtq_f32_s32(vmovl_s16(vget_low_s16(v))); }
 inline Floats quarter(Floats v) { return vmulq_n_f32(v, 0.25f); }
+// Two rows' 8 bytes' differences and sums, and the next pixel's bytes less
+// these, by the widening forms (usubl, uaddl: one instruction, where
+// widening each operand first took two more); reinterpreted as int16, the
+// same exact values (|difference| <= 255, sum <= 510).
+inline Int16s difference8(const std::uint8_t* a, const std::uint8_t* b)
+{
+    return vreinterpretq_s16_u16(vsubl_u8(vld1_u8(a), vld1_u8(b)));
+}
+inline Int16s sum8(const std::uint8_t* a, const std::uint8_t* b)
+{
+    return vreinterpretq_s16_u16(vaddl_u8(vld1_u8(a), vld1_u8(b)));
+}
+inline Int16s nextPixelDifference(const std::uint8_t* p)
+{
+    const uint8x8_t bytes = vld1_u8(p);
+    return vreinterpretq_s16_u16(vsubl_u8(vext_u8(bytes, bytes, 3), bytes));  // lanes 0-4: bytes 3-7 less 0-4
+}
 inline PairGradient pairTerms(Floats gx, Floats gy, const PairWeights& w)
 {
     const Floats along = vabdq_f32(vmulq_n_f32(gx, w.xAlong), vmulq_n_f32(gy, w.yAlong));
@@ -91,6 +107,13 @@ inline Int16s plus(Int16s a, Int16s b) { return _mm_add_epi16(a, b); }
 inline Int16s minus(Int16s a, Int16s b) { return _mm_sub_epi16(a, b); }
 inline Floats firstPixel(Int16s v) { return _mm_cvtepi32_ps(_mm_srai_epi32(_mm_unpacklo_epi16(v, v), 16)); }
 inline Floats quarter(Floats v) { return _mm_mul_ps(v, _mm_set1_ps(0.25f)); }
+inline Int16s difference8(const std::uint8_t* a, const std::uint8_t* b) { return minus(bytes8(a), bytes8(b)); }
+inline Int16s sum8(const std::uint8_t* a, const std::uint8_t* b) { return plus(bytes8(a), bytes8(b)); }
+inline Int16s nextPixelDifference(const std::uint8_t* p)
+{
+    const Int16s here = bytes8(p);
+    return minus(nextPixel(here), here);
+}
 inline PairGradient pairTerms(Floats gx, Floats gy, const PairWeights& w)
 {
     // |v| as v & 0x7fffffff (andps takes its operands in either order, andnps
@@ -188,9 +211,9 @@ inline PairGradient horizontalPair(const std::uint8_t* up, const std::uint8_t* r
 {
     const std::size_t i = 3 * x;
 #if defined(__ARM_NEON) || defined(__SSE2__)
-    const Int16s here = bytes8(row + i), vertical = minus(bytes8(down + i), bytes8(up + i));
+    const Int16s vertical = difference8(down + i, up + i);
     const Floats gy = firstPixel(plus(vertical, nextPixel(vertical)));
-    return pairTerms(firstPixel(minus(nextPixel(here), here)), kFolded ? gy : quarter(gy), w);
+    return pairTerms(firstPixel(nextPixelDifference(row + i)), kFolded ? gy : quarter(gy), w);
 #else
     PairGradient out;
     for (int c = 0; c < 3; ++c) {
@@ -211,10 +234,9 @@ inline PairGradient verticalPair(const std::uint8_t* row, const std::uint8_t* be
     const std::size_t i = 3 * x;
 #if defined(__ARM_NEON) || defined(__SSE2__)
     // The two rows' sums first (exact in int16): one shift of a pixel less.
-    const Int16s here = bytes8(row + i), hereBelow = bytes8(below + i);
-    const Int16s across = minus(nextPixel(plus(here, hereBelow)), plus(bytes8(row + i - 3), bytes8(below + i - 3)));
+    const Int16s across = minus(nextPixel(sum8(row + i, below + i)), sum8(row + i - 3, below + i - 3));
     const Floats gx = firstPixel(across);
-    return pairTerms(kFolded ? gx : quarter(gx), firstPixel(minus(hereBelow, here)), w);
+    return pairTerms(kFolded ? gx : quarter(gx), firstPixel(difference8(below + i, row + i)), w);
 #else
     PairGradient out;
     for (int c = 0; c < 3; ++c) {
