@@ -52,6 +52,16 @@ PairGradient pairGradient(const FrameView& frame, int x, int y, bool horizontal,
 
 namespace {
 
+// A constant made opaque to GCC, which then keeps it in a register (x86-64:
+// or as an instruction's memory operand) in buildGraph's pair loops rather
+// than building it again for each pair: a 64-bit constant is 2-4
+// instructions on AArch64, a movabs on x86-64 (780x580, x86-64: graph stage
+// 11.10 -> 10.97 M instructions).
+[[gnu::always_inline]] inline void hide(std::uint64_t& value)
+{
+    asm("" : "+r"(value));
+}
+
 // A border pair's labels as one word, q's high and p's low (addPair).
 std::uint64_t labelPair(std::int32_t p, std::int32_t q)
 {
@@ -100,25 +110,30 @@ void setKey(GraphEdge& edge, std::uint64_t key) { std::memcpy(&edge.a, &key, siz
 // buildGraph's hash table holds an edge's record as its offset in words
 // (3 e: a GraphEdge is 3 words), which addresses the record without a
 // multiply by 24 (x86-64: an index scaled by 8; AArch64: a shifted register).
+// The offsets as std::size_t in buildGraph's loop (64 bits on 64-bit
+// targets): no extension to 64 bits before each address (a 32-bit load from
+// the table zero-extends for free).
 static_assert(sizeof(GraphEdge) == 3 * sizeof(std::uint64_t));
-constexpr std::uint32_t kEdgeWords = 3;
-GraphEdge* recordAt(GraphEdge* edges, std::uint32_t words)
+constexpr std::size_t kEdgeWords = 3;
+GraphEdge* recordAt(GraphEdge* edges, std::size_t words)
 {
-    return reinterpret_cast<GraphEdge*>(reinterpret_cast<char*>(edges) + sizeof(std::uint64_t) * std::size_t{words});
+    return reinterpret_cast<GraphEdge*>(reinterpret_cast<char*>(edges) + sizeof(std::uint64_t) * words);
 }
-const GraphEdge* recordAt(const GraphEdge* edges, std::uint32_t words)
+const GraphEdge* recordAt(const GraphEdge* edges, std::size_t words)
 {
     return recordAt(const_cast<GraphEdge*>(edges), words);
 }
 
 // buildGraph's hash table of edge offsets by key; find gives the edge
 // (its index) of a key, or -1 for a pair past the capacity.
+constexpr std::uint64_t kHashMultiplier = 0x9e3779b97f4a7c15u;
 struct EdgeTable {
     const std::int32_t* table;
     std::size_t size;
     int shift;
     const GraphEdge* edges;
-    std::uint64_t slot(std::uint64_t key) const { return key * 0x9e3779b97f4a7c15u >> shift; }
+    std::uint64_t multiplier = kHashMultiplier;
+    std::uint64_t slot(std::uint64_t key) const { return key * multiplier >> shift; }
     std::int32_t find(std::uint64_t key) const
     {
         std::uint64_t at = slot(key);
@@ -196,11 +211,15 @@ void buildGraph(DecoderWorkspace& ws)
     // Locals, not workspace fields, across the kernel calls: kept in
     // registers (the edge count is in every look-up's dependency chain).
     GraphEdge* edges = ws.edges.get();
-    const EdgeTable lookup{table, tableSize, shift, edges};
+    // The hash's multiplier hidden from GCC (hide), which otherwise built it
+    // again for each pair (AArch64: mov and three movk).
+    std::uint64_t multiplier = kHashMultiplier;
+    hide(multiplier);
+    const EdgeTable lookup{table, tableSize, shift, edges, multiplier};
     // The edges so far as words of records (kEdgeWords per edge, the
     // table's unit): edgeCount().
-    std::int32_t edgeWords = 0;
-    auto edgeCount = [&] { return edgeWords / static_cast<std::int32_t>(kEdgeWords); };
+    std::size_t edgeWords = 0;
+    auto edgeCount = [&] { return static_cast<std::int32_t>(edgeWords / kEdgeWords); };
     // Edge records are cleared ahead of the count, 64 at a time.
     constexpr std::int32_t kClearBlock = 64;
     std::int32_t cleared = 0;
@@ -237,10 +256,10 @@ void buildGraph(DecoderWorkspace& ws)
         // minimum a cmov with the signed count, a branch with an unsigned
         // one: check the mispredictions when changing it). The record's
         // other fields are only written once it is the pair's edge.
-        const auto next = static_cast<std::uint32_t>(edgeWords);
+        const std::size_t next = edgeWords;
         setKey(*recordAt(edges, next), key);
-        auto probe = [&] { return std::min(static_cast<std::uint32_t>(table[slot]), next); };
-        std::uint32_t e = probe();
+        auto probe = [&] { return std::min<std::size_t>(static_cast<std::uint32_t>(table[slot]), next); };
+        std::size_t e = probe();
         // A collision: about 1 look-up in 12 (the collision loop out of the
         // way of the first probe's: a jump less per pair).
         if (keyOf(*recordAt(edges, e)) != key) [[unlikely]] {
@@ -252,7 +271,7 @@ void buildGraph(DecoderWorkspace& ws)
         table[slot] = static_cast<std::int32_t>(e);
         // e <= next, new where equal: the next record is past e's then, and
         // else the same (a stored e is at most next - kEdgeWords).
-        edgeWords = static_cast<std::int32_t>(std::max(e + kEdgeWords, next));
+        edgeWords = std::max(e + kEdgeWords, next);
         if constexpr (checked) {
             if (edgeCount() >= cleared) [[unlikely]] clearAhead();  // every 64 new edges (none once full)
         }
@@ -275,13 +294,23 @@ void buildGraph(DecoderWorkspace& ws)
     // there), which only an edge of 32767 pairs or more can reach: those
     // edges' normals are counted again after the loop
     // (recountSaturatingNormals), so that the adds here need no test.
-    auto addPair = [&](std::uint64_t labels, bool horizontal, const PairGradient& gradient, auto checked) {
+    // The two words to add, by direction (PairDeltas): set once per row
+    // and hidden from GCC (hide), which otherwise built them again for each
+    // pair (the vertical pairs' 1 + 1 << 48: mov and movk on AArch64).
+    struct PairDeltas {
+        std::uint64_t positive, negative;
+    };
+    auto pairDeltas = [](int at) {
+        PairDeltas deltas{std::uint64_t{1} + (std::uint64_t{1} << at), std::uint64_t{1} - (std::uint64_t{1} << at)};
+        hide(deltas.positive);
+        hide(deltas.negative);
+        return deltas;
+    };
+    auto addPair = [&](std::uint64_t labels, const PairDeltas& deltas, const PairGradient& gradient, auto checked) {
         const std::uint64_t key = std::max(labels, std::rotl(labels, 32));
         GraphEdge& edge = *edgeOf(key, checked);
         const bool positive = key == labels;  // the normal from a to b points to +x / +y
-        const int at = horizontal ? 32 : 48;
-        addCountAndNormal(edge, positive ? std::uint64_t{1} + (std::uint64_t{1} << at)
-                                         : std::uint64_t{1} - (std::uint64_t{1} << at));
+        addCountAndNormal(edge, positive ? deltas.positive : deltas.negative);
         edge.primaryGradient += gradient.primary;
         edge.secondaryGradient += gradient.secondary;
     };
@@ -306,40 +335,71 @@ void buildGraph(DecoderWorkspace& ws)
     const int words = borderWords(w);
     const int lastH = w - 2;  // the last horizontal pair, in the last word
     const std::uint64_t lastHBit = std::uint64_t{1} << (lastH & 63);
-    auto addRow = [&](int y, auto checked) {
+    // Inlined (both variants) by force: called, its captures were read from
+    // memory in the pair loops, and GCC's choice flipped with small changes
+    // of the loop.
+    auto addRow = [&](int y, auto checked) __attribute__((always_inline)) {
         constexpr bool kFolded = !decltype(checked)::value;
         const std::int32_t* row = label + static_cast<std::ptrdiff_t>(y) * w;
         const std::uint8_t* up = ws.frame.row(std::max(y - 1, 0));
         const std::uint8_t* pixels = ws.frame.row(y);
         const std::uint8_t* down = ws.frame.row(std::min(y + 1, h - 1));
         const std::uint64_t* masks = ws.rowBorders + static_cast<std::ptrdiff_t>(y) * words;
-        auto horizontalPairs = [&](std::size_t i0, std::uint64_t bits) {
-            for (; bits; bits &= bits - 1) {
-                const std::size_t x = i0 + static_cast<unsigned>(std::countr_zero(bits));
-                addPair(labelPair(row + x), true,
-                        graph_kernels::horizontalPair<kFolded>(up, pixels, down, x, kFolded ? horizontalWeights : plain),
-                        checked);
-            }
-        };
+        const PairDeltas horizontal = pairDeltas(32), vertical = pairDeltas(48);
+        // The pair loops address a word's labels and pixels from pointers
+        // to its column, set once per word: the column in the word
+        // (countr_zero) is the only index per pair, no add of the word's
+        // column to it. The horizontal loop's pointers are hidden from GCC
+        // (in place, so that they need no copies), which would otherwise fold
+        // them back into the row pointers and add the column per pair again
+        // (the vertical loop keeps them without: a barrier there cost a
+        // spill).
         if (lastH >= 0) {
-            for (int k = 0; k + 1 < words; ++k) horizontalPairs(64 * k, masks[k]);
-            horizontalPairs(64 * (words - 1), masks[words - 1] & ~lastHBit);
+            const std::int32_t* rowAt = row;
+            const std::uint8_t *upAt = up, *pixelsAt = pixels, *downAt = down;
+            auto horizontalPairs = [&](std::uint64_t bits) {
+                asm("" : "+r"(rowAt), "+r"(upAt), "+r"(pixelsAt), "+r"(downAt));
+                for (; bits; bits &= bits - 1) {
+                    const std::size_t x = static_cast<unsigned>(std::countr_zero(bits));
+                    addPair(labelPair(rowAt + x), horizontal,
+                            graph_kernels::horizontalPair<kFolded>(upAt, pixelsAt, downAt, x,
+                                                                   kFolded ? horizontalWeights : plain),
+                            checked);
+                }
+            };
+            for (int k = 0; k + 1 < words; ++k) {
+                horizontalPairs(masks[k]);
+                rowAt += 64;
+                upAt += 3 * 64;
+                pixelsAt += 3 * 64;
+                downAt += 3 * 64;
+            }
+            horizontalPairs(masks[words - 1] & ~lastHBit);
             if (masks[words - 1] & lastHBit)
-                addPair(labelPair(row + lastH), true, pairGradient(ws.frame, lastH, y, true, primary), checked);
+                addPair(labelPair(row + lastH), horizontal, pairGradient(ws.frame, lastH, y, true, primary), checked);
         }
         if (y + 1 < h) {
             auto verticalPair = [&](int x) {
-                addPair(labelPair(row[x], row[x + w]), false, pairGradient(ws.frame, x, y, false, primary), checked);
+                addPair(labelPair(row[x], row[x + w]), vertical, pairGradient(ws.frame, x, y, false, primary), checked);
             };
             if (row[0] != row[w]) verticalPair(0);
             // Columns 1 to w - 3.
             std::uint64_t first = ~std::uint64_t{1};
             for (int i0 = 0; i0 < w - 2; i0 += 64) {
-                const std::uint64_t mask = borderMask(row + i0, row + w + i0, std::min(64, w - 2 - i0)) & first;
+                const std::int32_t* rowAt = row + i0;
+                const std::int32_t* belowAt = rowAt + w;
+                const std::uint8_t* pixelsAt = pixels + 3 * static_cast<std::ptrdiff_t>(i0);
+                const std::uint8_t* downAt = down + 3 * static_cast<std::ptrdiff_t>(i0);
+                // A whole word (all but a row's last) by the inline kernel,
+                // its whole-word case only; the last one by the call.
+                const int count = w - 2 - i0;
+                const std::uint64_t mask = (count >= 64 ? graph_kernels::borderMask(rowAt, belowAt, 64)
+                                                        : borderMask(rowAt, belowAt, count)) &
+                                           first;
                 for (std::uint64_t bits = mask; bits; bits &= bits - 1) {
-                    const std::size_t x = static_cast<unsigned>(i0) + static_cast<unsigned>(std::countr_zero(bits));
-                    addPair(labelPair(row[x], row[x + w]), false,
-                            graph_kernels::verticalPair<kFolded>(pixels, down, x, kFolded ? verticalWeights : plain),
+                    const std::size_t x = static_cast<unsigned>(std::countr_zero(bits));
+                    addPair(labelPair(rowAt[x], belowAt[x]), vertical,
+                            graph_kernels::verticalPair<kFolded>(pixelsAt, downAt, x, kFolded ? verticalWeights : plain),
                             checked);
                 }
                 first = ~std::uint64_t{0};

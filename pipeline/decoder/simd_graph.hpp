@@ -1,9 +1,10 @@
-// The region graph's pair kernels, inline (internal to the decoder: included
-// by graph.cpp, whose border-pair loop calls them per pair, and by
-// simd_graph.cpp, whose horizontalPairGradient / verticalPairGradient
-// (simd.hpp, tested against pairGradient) are these). Inline because a call
-// per border pair, with the constants set up again each time, cost 0.015 ms
-// at 780x580 and 0.04 ms at 1388x1038.
+// The region graph's pair kernels and border masks, inline (internal to the
+// decoder: included by graph.cpp, whose border-pair loop calls them per pair
+// and per 64 columns, and by simd_graph.cpp, whose horizontalPairGradient /
+// verticalPairGradient (simd.hpp, tested against pairGradient) and borderMask
+// (tested against borderMaskReference) are these). Inline because a call per
+// border pair, with the constants set up again each time, cost 0.015 ms at
+// 780x580 and 0.04 ms at 1388x1038.
 #pragma once
 
 #include "pipeline/decoder/simd.hpp"
@@ -59,12 +60,28 @@ inline bool quarterFolds(const cv::Vec2f& primary)
 #if defined(__ARM_NEON)
 using Int16s = int16x8_t;
 using Floats = float32x4_t;
-inline Int16s bytes8(const std::uint8_t* p) { return vreinterpretq_s16_u16(vmovl_u8(vld1_u8(p))); }
 inline Int16s nextPixel(Int16s v) { return vextq_s16(v, v, 3); }  // lanes 3.. to 0..
 inline Int16s plus(Int16s a, Int16s b) { return vaddq_s16(a, b); }
 inline Int16s minus(Int16s a, Int16s b) { return vsubq_s16(a, b); }
 inline Floats firstPixel(Int16s v) { return vcvtq_f32_s32(vmovl_s16(vget_low_s16(v))); }
 inline Floats quarter(Floats v) { return vmulq_n_f32(v, 0.25f); }
+// Two rows' 8 bytes' differences and sums, and the next pixel's bytes less
+// these, by the widening forms (usubl, uaddl: one instruction, where
+// widening each operand first took two more); reinterpreted as int16, the
+// same exact values (|difference| <= 255, sum <= 510).
+inline Int16s difference8(const std::uint8_t* a, const std::uint8_t* b)
+{
+    return vreinterpretq_s16_u16(vsubl_u8(vld1_u8(a), vld1_u8(b)));
+}
+inline Int16s sum8(const std::uint8_t* a, const std::uint8_t* b)
+{
+    return vreinterpretq_s16_u16(vaddl_u8(vld1_u8(a), vld1_u8(b)));
+}
+inline Int16s nextPixelDifference(const std::uint8_t* p)
+{
+    const uint8x8_t bytes = vld1_u8(p);
+    return vreinterpretq_s16_u16(vsubl_u8(vext_u8(bytes, bytes, 3), bytes));  // lanes 0-4: bytes 3-7 less 0-4
+}
 inline PairGradient pairTerms(Floats gx, Floats gy, const PairWeights& w)
 {
     const Floats along = vabdq_f32(vmulq_n_f32(gx, w.xAlong), vmulq_n_f32(gy, w.yAlong));
@@ -90,6 +107,13 @@ inline Int16s plus(Int16s a, Int16s b) { return _mm_add_epi16(a, b); }
 inline Int16s minus(Int16s a, Int16s b) { return _mm_sub_epi16(a, b); }
 inline Floats firstPixel(Int16s v) { return _mm_cvtepi32_ps(_mm_srai_epi32(_mm_unpacklo_epi16(v, v), 16)); }
 inline Floats quarter(Floats v) { return _mm_mul_ps(v, _mm_set1_ps(0.25f)); }
+inline Int16s difference8(const std::uint8_t* a, const std::uint8_t* b) { return minus(bytes8(a), bytes8(b)); }
+inline Int16s sum8(const std::uint8_t* a, const std::uint8_t* b) { return plus(bytes8(a), bytes8(b)); }
+inline Int16s nextPixelDifference(const std::uint8_t* p)
+{
+    const Int16s here = bytes8(p);
+    return minus(nextPixel(here), here);
+}
 inline PairGradient pairTerms(Floats gx, Floats gy, const PairWeights& w)
 {
     // |v| as v & 0x7fffffff (andps takes its operands in either order, andnps
@@ -113,6 +137,71 @@ inline PairGradient pairTerms(Floats gx, Floats gy, const PairWeights& w)
 }
 #endif
 
+// borderMask (simd.hpp): inline, so that the graph's vertical border loop
+// (graph.cpp) takes it without a call per 64 columns and its constants set up
+// again each time; the out-of-line borderMask, which the tests compare with
+// borderMaskReference, is this.
+[[gnu::always_inline]] inline std::uint64_t borderMask(const std::int32_t* a, const std::int32_t* b, int count)
+{
+    // 16 labels per step, no branch per pixel (a border every ~6 pixels is
+    // unpredictable); the caller walks the set bits. A whole word (most
+    // calls) in four steps with constant shifts; a shorter one in steps and
+    // a last step of the 16 labels ending at count, which overlaps the step
+    // before (the same bits again) instead of a label by label tail.
+    // 32-bit ARM (armv7-a NEON) has none of uzp1, addv and byteMask64's
+    // AArch64 instructions: it takes the label by label loop.
+#if defined(__aarch64__) || defined(__SSE2__)
+#if defined(__aarch64__)
+    const uint8x16_t weights = {1, 2, 4, 8, 16, 32, 64, 128, 1, 2, 4, 8, 16, 32, 64, 128};
+    // 16 labels' comparisons as bytes (0xff: equal): the low bytes of the
+    // 32-bit masks gathered by three uzp1 (even elements), in order (the
+    // narrowing moves took 6 instructions).
+    auto equal16 = [&](int at) {
+        auto equal4 = [&](int i) { return vreinterpretq_u16_u32(vceqq_s32(vld1q_s32(a + i), vld1q_s32(b + i))); };
+        const uint16x8_t low = vuzp1q_u16(equal4(at), equal4(at + 4));
+        const uint16x8_t high = vuzp1q_u16(equal4(at + 8), equal4(at + 12));
+        return vuzp1q_u8(vreinterpretq_u8_u16(low), vreinterpretq_u8_u16(high));
+    };
+    auto differ16 = [&](int at) -> std::uint64_t {
+        const uint8x16_t differ = vbicq_u8(weights, equal16(at));
+        return vaddv_u8(vget_low_u8(differ)) | static_cast<unsigned>(vaddv_u8(vget_high_u8(differ))) << 8;
+    };
+    // A whole word by byteMask64 (simd.hpp) of the 64 labels' differences.
+    auto differ64 = [&]() -> std::uint64_t {
+        return byteMask64(vmvnq_u8(equal16(0)), vmvnq_u8(equal16(16)), vmvnq_u8(equal16(32)), vmvnq_u8(equal16(48)));
+    };
+#else
+    auto equal4 = [&](int at) {
+        return _mm_cmpeq_epi32(_mm_loadu_si128(reinterpret_cast<const __m128i*>(a + at)),
+                               _mm_loadu_si128(reinterpret_cast<const __m128i*>(b + at)));
+    };
+    // 16 labels' equalities as bits (saturating packs keep the all-ones /
+    // zero lanes).
+    auto equal16 = [&](int at) -> std::uint64_t {
+        const __m128i equal = _mm_packs_epi16(_mm_packs_epi32(equal4(at), equal4(at + 4)),
+                                              _mm_packs_epi32(equal4(at + 8), equal4(at + 12)));
+        return static_cast<unsigned>(_mm_movemask_epi8(equal));
+    };
+    auto differ16 = [&](int at) -> std::uint64_t { return ~equal16(at) & 0xffff; };
+    // A whole word's equalities inverted once (the 16 bits' masks
+    // zero-extended: no masking each).
+    auto differ64 = [&]() -> std::uint64_t {
+        return ~(equal16(0) | equal16(16) << 16 | equal16(32) << 32 | equal16(48) << 48);
+    };
+#endif
+    if (count == 64) return differ64();
+    if (count >= 16) {
+        std::uint64_t bits = 0;
+        int i = 0;
+        for (; i + 16 <= count; i += 16) bits |= differ16(i) << i;
+        if (i < count) bits |= differ16(count - 16) << (count - 16);
+        return bits;
+    }
+#endif
+    std::uint64_t bits = 0;
+    for (int i = 0; i < count; ++i) bits |= std::uint64_t{a[i] != b[i]} << i;
+    return bits;
+}
 
 // kFolded: w are the folded weights (horizontalFoldedWeights /
 // verticalFoldedWeights), else plainWeights and the quarter taken here.
@@ -122,9 +211,9 @@ inline PairGradient horizontalPair(const std::uint8_t* up, const std::uint8_t* r
 {
     const std::size_t i = 3 * x;
 #if defined(__ARM_NEON) || defined(__SSE2__)
-    const Int16s here = bytes8(row + i), vertical = minus(bytes8(down + i), bytes8(up + i));
+    const Int16s vertical = difference8(down + i, up + i);
     const Floats gy = firstPixel(plus(vertical, nextPixel(vertical)));
-    return pairTerms(firstPixel(minus(nextPixel(here), here)), kFolded ? gy : quarter(gy), w);
+    return pairTerms(firstPixel(nextPixelDifference(row + i)), kFolded ? gy : quarter(gy), w);
 #else
     PairGradient out;
     for (int c = 0; c < 3; ++c) {
@@ -145,10 +234,9 @@ inline PairGradient verticalPair(const std::uint8_t* row, const std::uint8_t* be
     const std::size_t i = 3 * x;
 #if defined(__ARM_NEON) || defined(__SSE2__)
     // The two rows' sums first (exact in int16): one shift of a pixel less.
-    const Int16s here = bytes8(row + i), hereBelow = bytes8(below + i);
-    const Int16s across = minus(nextPixel(plus(here, hereBelow)), plus(bytes8(row + i - 3), bytes8(below + i - 3)));
+    const Int16s across = minus(nextPixel(sum8(row + i, below + i)), sum8(row + i - 3, below + i - 3));
     const Floats gx = firstPixel(across);
-    return pairTerms(kFolded ? gx : quarter(gx), firstPixel(minus(hereBelow, here)), w);
+    return pairTerms(kFolded ? gx : quarter(gx), firstPixel(difference8(below + i, row + i)), w);
 #else
     PairGradient out;
     for (int c = 0; c < 3; ++c) {
