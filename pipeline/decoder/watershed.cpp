@@ -34,6 +34,7 @@
 #include <array>
 #include <bit>
 #include <cstring>
+#include <limits>
 
 #if defined(__SSE2__)
 #include <emmintrin.h>
@@ -194,6 +195,10 @@ std::size_t maxProvisional(int width, int height)
     return static_cast<std::size_t>(height / 2) * width + (height % 2) * ((width + 1) / 2);
 }
 
+// A pixel index's sign bit (63; on 32-bit targets 31): a shift of a
+// sign-extended label by it gives -1 for a negative one.
+constexpr int kIndexSignShift = std::numeric_limits<std::ptrdiff_t>::digits;
+
 // Step 3's numbering: each provisional label's number, a root's (in raster
 // order, or over capacity the ~number set before), another's that of its
 // parent (a smaller label, numbered before), written at its first pixel too.
@@ -203,11 +208,11 @@ std::size_t maxProvisional(int width, int height)
 // the parent loaded sign-extended (no extension of a 32-bit index): 16
 // instructions per label instead of 19 (x86-64-v3; clones for BMI's andn).
 template <bool kOverCapacity>
-STRIA_X86_CLONES [[gnu::noinline]] void numberLabels(std::int32_t* parent, const std::int32_t* firstPixel, std::int32_t* label,
-                                    int provisional)
+STRIA_X86_CLONES [[gnu::noinline]] void numberLabels(std::int32_t* parent, const std::int32_t* firstPixel,
+                                                     std::int32_t* label, int provisional)
 {
     for (std::ptrdiff_t l = 0, next = 0; l < provisional; ++l) {
-        const std::ptrdiff_t up = parent[l], root = up >> 63;  // -1 for a root
+        const std::ptrdiff_t up = parent[l], root = up >> kIndexSignShift;  // -1 for a root
         const std::ptrdiff_t number = kOverCapacity ? ~up : next;
         parent[l] = static_cast<std::int32_t>((number & root) | (parent[up & ~root] & ~root));
         label[firstPixel[l]] = parent[l];
@@ -520,7 +525,8 @@ STRIA_X86_CLONES void computeWatershed(DecoderWorkspace& ws)
                 path[0] = wordStart + std::countr_zero(bits);
                 for (int k = 0; k < kWalkSteps; ++k) {
                     // (As a mask: GCC made a ternary a branch.)
-                    const std::ptrdiff_t q = path[k], on = std::ptrdiff_t{label[q]} >> 63;  // -1 while not final
+                    // on: -1 while not final
+                    const std::ptrdiff_t q = path[k], on = std::ptrdiff_t{label[q]} >> kIndexSignShift;
                     path[k + 1] = q + (stepOf[code[q]] & on);
                 }
                 std::ptrdiff_t end = path[kWalkSteps];
