@@ -80,13 +80,13 @@ std::size_t codeEntries(std::size_t pixels, std::size_t width)
     if (span == 64) {  // all words but a row's last: 4 steps without bounds
         for (int i = 0; i < 4; ++i) {
             const __m128i c = _mm_loadu_si128(reinterpret_cast<const __m128i*>(code + 16 * i));
-            bits |= std::uint64_t{static_cast<std::uint16_t>(_mm_movemask_epi8(_mm_slli_epi16(c, 4)))} << 16 * i;
+            bits |= std::uint64_t{static_cast<std::uint32_t>(_mm_movemask_epi8(_mm_slli_epi16(c, 4)))} << 16 * i;
         }
         return bits;
     }
     for (; x + 16 <= span; x += 16) {
         const __m128i c = _mm_loadu_si128(reinterpret_cast<const __m128i*>(code + x));
-        bits |= std::uint64_t{static_cast<std::uint16_t>(_mm_movemask_epi8(_mm_slli_epi16(c, 4)))} << x;
+        bits |= std::uint64_t{static_cast<std::uint32_t>(_mm_movemask_epi8(_mm_slli_epi16(c, 4)))} << x;
     }
 #elif defined(__aarch64__)
     if (span == 64) {  // all words but a row's last
@@ -285,7 +285,7 @@ STRIA_X86_CLONES void computeWatershed(DecoderWorkspace& ws)
                 const __m128i c = _mm_loadu_si128(reinterpret_cast<const __m128i*>(code + y * w + x + 16 * i));
                 const __m128i l = _mm_loadu_si128(reinterpret_cast<const __m128i*>(g + y * w + x + 16 * i));
                 const auto raised = _mm_movemask_epi8(_mm_andnot_si128(_mm_cmpeq_epi8(l, zero), _mm_cmpeq_epi8(c, flat)));
-                bits |= std::uint64_t{static_cast<std::uint16_t>(raised)} << 16 * i;
+                bits |= std::uint64_t{static_cast<std::uint32_t>(raised)} << 16 * i;
             }
             for (; bits != 0; bits &= bits - 1) seed(x + std::countr_zero(bits), y);
         }
