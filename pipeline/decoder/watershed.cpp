@@ -138,10 +138,11 @@ RunWord* runWordsIn(std::int32_t* scratch, int width, int height)
 // (the last start at or before x; rarely one in the words before).
 // through: bits 0 to x - x0 set, as bits ^ (bits - 1) when x is the lowest
 // set bit of the bits a loop walks (cheaper than from x).
-[[gnu::always_inline]] inline std::int32_t runStart(const RunWord& word, int x0, std::uint64_t through)
+// (64-bit on x86-64: no sign extension of the index.)
+[[gnu::always_inline]] inline std::ptrdiff_t runStart(const RunWord& word, std::ptrdiff_t x0, std::uint64_t through)
 {
     const std::uint64_t before = word.starts & through;
-    const std::int32_t inWord = x0 + 63 - std::countl_zero(before | 1);
+    const std::ptrdiff_t inWord = x0 + 63 - std::countl_zero(before | 1);
     return before != 0 ? inWord : word.lastStart;  // a cmov (and-or masks took 3 more)
 }
 
