@@ -246,8 +246,8 @@ void computeRegions(DecoderWorkspace& ws)
 
     copyRunsVersion(ws, next, static_cast<std::int64_t>(w) * h > 8 * runs);
 
-    // Regions of up to 255 pixels four at a time (channelMediansOfFour
-    // overlaps their searches), larger ones alone. They count a region's last
+    // Regions of up to 255 pixels four at a time (channelMediansOfFourAlike
+    // and channelMediansOfFour overlap their searches), larger ones alone. They count a region's last
     // block of 4 whole, up to 3 entries into its gap: the gap's entries get
     // the value 0 (bytes 0x80), which no search counts (without them each
     // pass masked the last block's lanes, 5 instructions per region and
@@ -281,9 +281,18 @@ void computeRegions(DecoderWorkspace& ws)
             corrected[i] = ((Floats{} + mLanes[i][0] * median[0]) + mLanes[i][1] * median[1]) + mLanes[i][2] * median[2];
         for (int j = 0; j < 4; ++j) regions[r[j]].color = {corrected[0][j], corrected[1][j], corrected[2][j]};
     };
-    std::array<const std::uint32_t*, 4> smallPixels;
-    std::array<int, 4> smallCounts, small;  // the regions waiting for a group of 4
-    int waiting = 0;
+    // Regions of up to 255 pixels wait in a bucket per block count (1-64)
+    // for a group of four (channelMediansOfFourAlike walks their blocks
+    // together, one jump per pass for the four); those left over at the end
+    // go four at a time to channelMediansOfFour, the last up to 3 alone
+    // (780x580 regions 9.38 -> 9.17 M instructions per decode; 1388x1038
+    // 23.98 -> 23.71 M, their indirect jumps' mispredictions 9.1 -> 2.6 k).
+    struct Bucket {
+        std::array<const std::uint32_t*, 4> pixels;
+        std::array<int, 4> counts, regions;
+        int waiting = 0;
+    };
+    std::array<Bucket, 64> buckets;
     auto pad = [&](int r) {
         constexpr std::uint64_t zeros = 0x8080808080808080u;
         auto* end = reinterpret_cast<std::uint32_t*>(next[r]);
@@ -300,16 +309,28 @@ void computeRegions(DecoderWorkspace& ws)
         if (size > 255) {
             setColor(r, channelMedians(pixels, size));
         } else {
-            smallPixels[waiting] = pixels;
-            smallCounts[waiting] = size;
-            small[waiting] = r;
-            if (++waiting == 4) {
-                setColorsOfFour(small, channelMediansOfFour(smallPixels, smallCounts));
-                waiting = 0;
+            Bucket& bucket = buckets[(size - 1) / 4];
+            bucket.pixels[bucket.waiting] = pixels;
+            bucket.counts[bucket.waiting] = size;
+            bucket.regions[bucket.waiting] = r;
+            if (++bucket.waiting == 4) {
+                setColorsOfFour(bucket.regions, channelMediansOfFourAlike(bucket.pixels, bucket.counts));
+                bucket.waiting = 0;
             }
         }
     }
-    for (int j = 0; j < waiting; ++j) setColor(small[j], channelMedians(smallPixels[j], smallCounts[j]));
+    Bucket left;
+    for (const Bucket& bucket : buckets)
+        for (int j = 0; j < bucket.waiting; ++j) {
+            left.pixels[left.waiting] = bucket.pixels[j];
+            left.counts[left.waiting] = bucket.counts[j];
+            left.regions[left.waiting] = bucket.regions[j];
+            if (++left.waiting == 4) {
+                setColorsOfFour(left.regions, channelMediansOfFour(left.pixels, left.counts));
+                left.waiting = 0;
+            }
+        }
+    for (int j = 0; j < left.waiting; ++j) setColor(left.regions[j], channelMedians(left.pixels[j], left.counts[j]));
 }
 
 }  // namespace stria::pipeline

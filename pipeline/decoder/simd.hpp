@@ -137,6 +137,10 @@ std::array<std::uint8_t, 3> channelMedians(const std::uint32_t* pixels, int coun
 // region j's medians in bytes 0-2 of dword j (byte 3 zero).
 std::array<std::uint32_t, 4> channelMediansOfFour(const std::array<const std::uint32_t*, 4>& pixels,
                                                   const std::array<int, 4>& counts);
+// The same for four regions of 1-255 pixels with the same number of blocks
+// of 4 ((count + 3) / 4 equal), their blocks walked together.
+std::array<std::uint32_t, 4> channelMediansOfFourAlike(const std::array<const std::uint32_t*, 4>& pixels,
+                                                       const std::array<int, 4>& counts);
 
 // Region statistics and graph (regions.cpp, graph.cpp). Bit i of the result
 // is set where a[i] != b[i], for i < count <= 64: with b = a + 1 the borders

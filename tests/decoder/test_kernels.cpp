@@ -171,6 +171,22 @@ int regionMediansDiffering(unsigned seed)
             const std::array<std::uint8_t, 3> v = channelMediansReference(regions[j], counts[j]);
             differing += medians[j] != static_cast<std::uint32_t>(v[0] | v[1] << 8 | v[2] << 16);
         }
+        if (count > 255) return;
+        // The kernel for four regions of as many blocks: this one, then three
+        // of random counts with the same (count + 3) / 4.
+        const int first = count - (count - 1) % 4;  // 1, 5, 9, ..: the block count's smallest
+        const std::array<int, 4> alike{count, first + static_cast<int>(rng() % 4), first + static_cast<int>(rng() % 4),
+                                       first + static_cast<int>(rng() % 4)};
+        std::array<int, 4> clamped = alike;
+        for (int j = 1; j < 4; ++j) {
+            clamped[j] = std::min(alike[j], 255);
+            pad(other.data() + 258 * (j - 1) + clamped[j]);
+        }
+        const auto alikeMedians = channelMediansOfFourAlike(regions, clamped);
+        for (int j = 0; j < 4; ++j) {
+            const std::array<std::uint8_t, 3> v = channelMediansReference(regions[j], clamped[j]);
+            differing += alikeMedians[j] != static_cast<std::uint32_t>(v[0] | v[1] << 8 | v[2] << 16);
+        }
     };
     for (int count : {1, 2, 3, 4, 5, 63, 64, 65, 252, 255, 256, 257, 511, 512, 516, 771, 1016, 1019, 1020, 1021,
                       1024, 2040, 2041, 3000, 32767, 32768, 40000})
