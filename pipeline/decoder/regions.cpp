@@ -10,8 +10,9 @@
 // stores for the second and for the graph and depth stages): the first counts each
 // region's pixels and sums their coordinates; the second, with the counts as
 // offsets (a counting sort by label), copies each run's pixels, 4 bytes each
-// (as value ^ 0x80, for signed compares), into the watershed's order buffer, where each region's pixels then lie
-// together, 3 free entries after each region's (a region's runs arrive in
+// (as value ^ kRegionByteBias: 0x80 for SSE2's signed compares, 0 on
+// NEON), into the watershed's order buffer, where each region's pixels then
+// lie together, 3 free entries after each region's (a region's runs arrive in
 // order, so its write position moves through one cache line at a time).
 // Each region's medians are then selected from its own few hundred bytes,
 // in L1 (channelMedians, simd.hpp).
@@ -40,7 +41,8 @@ constexpr int kRegionGap = 3;
 
 // The copy pass: each run's pixels, a pixel's 3 bytes and the next one in 4
 // bytes (the frame's last pixel has no next byte: 3 copied), each byte ^
-// 0x80 (channelMedians compares them as signed bytes), to its region's next
+// kRegionByteBias (x86: 0x80, channelMedians compares them as signed bytes;
+// NEON: 0, no xor), to its region's next
 // positions, from next[r] (the address of its next entry, as an integer:
 // advanced by the run's length; with an offset into the buffer each run took
 // 2 instructions more).
@@ -57,7 +59,7 @@ using Bytes16 = std::uint8_t __attribute__((vector_size(16)));
 {
     Bytes16 bytes;
     std::memcpy(&bytes, from, 16);
-    bytes = __builtin_shuffle(bytes, Bytes16{0, 1, 2, 3, 3, 4, 5, 6, 6, 7, 8, 9, 9, 10, 11, 12}) ^ 0x80;
+    bytes = __builtin_shuffle(bytes, Bytes16{0, 1, 2, 3, 3, 4, 5, 6, 6, 7, 8, 9, 9, 10, 11, 12}) ^ kRegionByteBias;
     std::memcpy(to, &bytes, 16);
 }
 [[gnu::always_inline]] inline void fourPixelsShifted(std::uint32_t* to, const std::uint8_t* from)
@@ -66,7 +68,7 @@ using Bytes16 = std::uint8_t __attribute__((vector_size(16)));
     auto twoPixels = [](std::uint32_t* to, const std::uint8_t* from) {
         std::uint64_t bytes;
         std::memcpy(&bytes, from, 8);
-        bytes = ((bytes & 0xffffffffu) | (bytes >> 24) << 32) ^ 0x8080808080808080u;
+        bytes = ((bytes & 0xffffffffu) | (bytes >> 24) << 32) ^ kRegionByteBias * 0x0101010101010101u;
         std::memcpy(to, &bytes, 8);
     };
     twoPixels(to, from);
@@ -96,7 +98,7 @@ template <bool shuffled, bool threeBlocks>
                 auto copy = [&](int bytes) {
                     std::uint32_t value = 0;
                     std::memcpy(&value, pixel, bytes);
-                    value ^= 0x80808080u;
+                    value ^= kRegionByteBias * 0x01010101u;
                     std::memcpy(out++, &value, 4);
                 };
                 for (std::ptrdiff_t i = x; i < whole; ++i, pixel += 3) copy(4);
@@ -249,7 +251,7 @@ void computeRegions(DecoderWorkspace& ws)
     // Regions of up to 255 pixels four at a time (channelMediansOfFourAlike
     // and channelMediansOfFour overlap their searches), larger ones alone. They count a region's last
     // block of 4 whole, up to 3 entries into its gap: the gap's entries get
-    // the value 0 (bytes 0x80), which no search counts (without them each
+    // the value 0 (bytes kRegionByteBias), which no search counts (without them each
     // pass masked the last block's lanes, 5 instructions per region and
     // pass: 780x580 medians of four 2.99 -> 2.78 M instructions per
     // decode, with the jumps' bounds checks). Written kPadAhead regions before the
@@ -294,7 +296,7 @@ void computeRegions(DecoderWorkspace& ws)
     };
     std::array<Bucket, 64> buckets;
     auto pad = [&](int r) {
-        constexpr std::uint64_t zeros = 0x8080808080808080u;
+        constexpr std::uint64_t zeros = kRegionByteBias * 0x0101010101010101u;
         auto* end = reinterpret_cast<std::uint32_t*>(next[r]);
         std::memcpy(end, &zeros, 8);
         std::memcpy(end + 2, &zeros, 4);

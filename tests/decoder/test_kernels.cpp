@@ -147,7 +147,7 @@ TEST(DecoderKernels, EdgeLocationGradientsEqualReferenceOnSimulatorFrame)
 // the 16-bit lanes' search, the 64-block steps of the chunks' loop and the
 // 254 blocks of one chunk), of random bytes, of
 // few distinct values (ties at the median) and of the extremes 0 and 255.
-// Each region's pixels are followed by 3 entries of the value 0 (0x80
+// Each region's pixels are followed by 3 entries of the value 0 (kRegionByteBias
 // stored), as the kernels require.
 int regionMediansDiffering(unsigned seed)
 {
@@ -155,7 +155,7 @@ int regionMediansDiffering(unsigned seed)
     std::vector<std::uint32_t> pixels(40000 + 3);
     int differing = 0;
     std::vector<std::uint32_t> other(3 * (255 + 3));
-    auto pad = [](std::uint32_t* end) { std::fill(end, end + 3, 0x80808080u); };
+    auto pad = [](std::uint32_t* end) { std::fill(end, end + 3, kRegionByteBias * 0x01010101u); };
     auto compare = [&](int count) {
         pad(pixels.data() + count);
         differing += channelMedians(pixels.data(), count) != channelMediansReference(pixels.data(), count);
@@ -209,9 +209,9 @@ TEST(DecoderKernels, RegionMediansMatchReference)
 {
     EXPECT_EQ(regionMediansDiffering(7u), 0);
     // The reference itself: byte k's value at index count / 2 of the sorted
-    // (the bytes stored as value ^ 0x80).
+    // (the bytes stored as value ^ kRegionByteBias).
     std::array<std::uint32_t, 6> pixels{0x000109u, 0x010203u, 0x0203c8u, 0x030403u, 0x040507u, 0x0506ffu};
-    for (std::uint32_t& p : pixels) p ^= 0x808080u;
+    for (std::uint32_t& p : pixels) p ^= kRegionByteBias * 0x010101u;
     EXPECT_EQ(channelMediansReference(pixels.data(), 6), (std::array<std::uint8_t, 3>{9, 4, 3}));
     EXPECT_EQ(channelMediansReference(pixels.data(), 5), (std::array<std::uint8_t, 3>{7, 3, 2}));
     EXPECT_EQ(channelMediansReference(pixels.data(), 1), (std::array<std::uint8_t, 3>{9, 1, 0}));
