@@ -10,8 +10,9 @@
 // stores for the second and for the graph and depth stages): the first counts each
 // region's pixels and sums their coordinates; the second, with the counts as
 // offsets (a counting sort by label), copies each run's pixels, 4 bytes each
-// (as value ^ 0x80, for signed compares), into the watershed's order buffer, where each region's pixels then lie
-// together, 3 free entries after each region's (a region's runs arrive in
+// (as value ^ kRegionByteBias: 0x80 for SSE2's signed compares, 0 on
+// NEON), into the watershed's order buffer, where each region's pixels then
+// lie together, 3 free entries after each region's (a region's runs arrive in
 // order, so its write position moves through one cache line at a time).
 // Each region's medians are then selected from its own few hundred bytes,
 // in L1 (channelMedians, simd.hpp).
@@ -40,7 +41,8 @@ constexpr int kRegionGap = 3;
 
 // The copy pass: each run's pixels, a pixel's 3 bytes and the next one in 4
 // bytes (the frame's last pixel has no next byte: 3 copied), each byte ^
-// 0x80 (channelMedians compares them as signed bytes), to its region's next
+// kRegionByteBias (x86: 0x80, channelMedians compares them as signed bytes;
+// NEON: 0, no xor), to its region's next
 // positions, from next[r] (the address of its next entry, as an integer:
 // advanced by the run's length; with an offset into the buffer each run took
 // 2 instructions more).
@@ -57,7 +59,7 @@ using Bytes16 = std::uint8_t __attribute__((vector_size(16)));
 {
     Bytes16 bytes;
     std::memcpy(&bytes, from, 16);
-    bytes = __builtin_shuffle(bytes, Bytes16{0, 1, 2, 3, 3, 4, 5, 6, 6, 7, 8, 9, 9, 10, 11, 12}) ^ 0x80;
+    bytes = __builtin_shuffle(bytes, Bytes16{0, 1, 2, 3, 3, 4, 5, 6, 6, 7, 8, 9, 9, 10, 11, 12}) ^ kRegionByteBias;
     std::memcpy(to, &bytes, 16);
 }
 [[gnu::always_inline]] inline void fourPixelsShifted(std::uint32_t* to, const std::uint8_t* from)
@@ -66,20 +68,22 @@ using Bytes16 = std::uint8_t __attribute__((vector_size(16)));
     auto twoPixels = [](std::uint32_t* to, const std::uint8_t* from) {
         std::uint64_t bytes;
         std::memcpy(&bytes, from, 8);
-        bytes = ((bytes & 0xffffffffu) | (bytes >> 24) << 32) ^ 0x8080808080808080u;
+        bytes = ((bytes & 0xffffffffu) | (bytes >> 24) << 32) ^ kRegionByteBias * 0x0101010101010101u;
         std::memcpy(to, &bytes, 8);
     };
     twoPixels(to, from);
     twoPixels(to + 2, from + 6);
 }
 
-template <bool shuffled>
+// threeBlocks: a third block without a loop (where the frame's runs average
+// more than 8 pixels: the loop's exit was then mispredicted on most runs).
+template <bool shuffled, bool threeBlocks>
 [[gnu::always_inline]] inline void copyRuns(const DecoderWorkspace& ws, std::int64_t* next)
 {
     const int w = ws.width, h = ws.height, words = borderWords(w);
     // Rows whose next row has 25 bytes or more (the whole blocks read up to
-    // 25 bytes past a row's end).
-    const int blockRows = w >= 9 ? h - 1 : 0;
+    // 25 bytes past a row's end; 37 with the third block).
+    const int blockRows = w >= (threeBlocks ? 13 : 9) ? h - 1 : 0;
     for (int y = 0; y < h; ++y) {
         const std::int32_t* row = ws.labels.get() + static_cast<std::ptrdiff_t>(y) * w;
         const std::uint8_t* pixels = ws.frame.row(y);
@@ -94,7 +98,7 @@ template <bool shuffled>
                 auto copy = [&](int bytes) {
                     std::uint32_t value = 0;
                     std::memcpy(&value, pixel, bytes);
-                    value ^= 0x80808080u;
+                    value ^= kRegionByteBias * 0x01010101u;
                     std::memcpy(out++, &value, 4);
                 };
                 for (std::ptrdiff_t i = x; i < whole; ++i, pixel += 3) copy(4);
@@ -124,7 +128,10 @@ template <bool shuffled>
             // was mispredicted on most runs; 780x580: -18 k mispredictions,
             // copy phase 0.59 -> 0.51 ms). They read at most 25 bytes past
             // the row's end (inside the next row). Runs of more than 8 pixels
-            // loop over the rest.
+            // loop over the rest. Where runs average more than 8 pixels
+            // (1388x1038: ~9.4), a third block the same way, into the sink
+            // where the run has at most 8 pixels (37 bytes past the row's
+            // end), and the loop from 12.
             const std::uint8_t* pixel = pixels + 3 * x;
             auto block = [&](std::uint32_t* to, int i) {
                 if constexpr (shuffled)
@@ -139,7 +146,18 @@ template <bool shuffled>
             asm("" : "+r"(second));
             block(out, 0);
             block(second, 4);
-            for (int i = 8; i < length; i += 4) block(out + i, i);
+            int i = 8;
+            if constexpr (threeBlocks) {
+                std::uint32_t* third = length > 8 ? out + 8 : sink;
+                asm("" : "+r"(third));
+                block(third, 8);
+                i = 12;
+            }
+            // The loop's bound also hidden: GCC would otherwise branch on
+            // length > 8 for both the third block and the loop.
+            std::ptrdiff_t loopEnd = length;
+            asm("" : "+r"(loopEnd));
+            for (; i < loopEnd; i += 4) block(out + i, i);
             x = end;
         };
         // forEachBit's loop with 64-bit positions (no sign extensions).
@@ -153,22 +171,24 @@ template <bool shuffled>
 #if defined(__x86_64__)
 // SSE2 has no byte shuffle: the x86-64-v3 version (picked at run time by
 // GCC's function multiversioning, an ifunc) has SSSE3's.
-[[gnu::target("default")]] void copyRunsVersion(const DecoderWorkspace& ws, std::int64_t* next)
+[[gnu::target("default")]] void copyRunsVersion(const DecoderWorkspace& ws, std::int64_t* next, bool threeBlocks)
 {
-    copyRuns<false>(ws, next);
+    threeBlocks ? copyRuns<false, true>(ws, next) : copyRuns<false, false>(ws, next);
 }
-[[gnu::target("arch=x86-64-v3")]] void copyRunsVersion(const DecoderWorkspace& ws, std::int64_t* next)
+[[gnu::target("arch=x86-64-v3")]] void copyRunsVersion(const DecoderWorkspace& ws, std::int64_t* next,
+                                                       bool threeBlocks)
 {
-    copyRuns<true>(ws, next);
+    threeBlocks ? copyRuns<true, true>(ws, next) : copyRuns<true, false>(ws, next);
 }
 #else
-void copyRunsVersion(const DecoderWorkspace& ws, std::int64_t* next)
+void copyRunsVersion(const DecoderWorkspace& ws, std::int64_t* next, bool threeBlocks)
 {
 #if defined(__aarch64__)
-    copyRuns<true>(ws, next);
+    constexpr bool shuffled = true;
 #else
-    copyRuns<false>(ws, next);
+    constexpr bool shuffled = false;
 #endif
+    threeBlocks ? copyRuns<shuffled, true>(ws, next) : copyRuns<shuffled, false>(ws, next);
 }
 #endif
 }  // namespace
@@ -224,12 +244,22 @@ void computeRegions(DecoderWorkspace& ws)
         first += counter[r] + kRegionGap;
     }
 
-    copyRunsVersion(ws, next);
+    // The runs of every 8th row, from their masks (only the copy's choice
+    // of blocks depends on it: a sample suffices; a count per run in the
+    // first pass took 0.08 M instructions per 780x580 decode, this 0.01 M).
+    std::int64_t sampledRuns = 0, sampledPixels = 0;
+    for (int y = 0; y < h; y += 8) {
+        const std::uint64_t* masks = ws.rowBorders + static_cast<std::ptrdiff_t>(y) * words;
+        sampledRuns += 1;
+        sampledPixels += w;
+        for (int i = 0; i < words; ++i) sampledRuns += std::popcount(masks[i]);
+    }
+    copyRunsVersion(ws, next, sampledPixels > 8 * sampledRuns);
 
-    // Regions of up to 255 pixels four at a time (channelMediansOfFour
-    // overlaps their searches), larger ones alone. They count a region's last
+    // Regions of up to 255 pixels four at a time (channelMediansOfFourAlike
+    // and channelMediansOfFour overlap their searches), larger ones alone. They count a region's last
     // block of 4 whole, up to 3 entries into its gap: the gap's entries get
-    // the value 0 (bytes 0x80), which no search counts (without them each
+    // the value 0 (bytes kRegionByteBias), which no search counts (without them each
     // pass masked the last block's lanes, 5 instructions per region and
     // pass: 780x580 medians of four 2.99 -> 2.78 M instructions per
     // decode, with the jumps' bounds checks). Written kPadAhead regions before the
@@ -261,11 +291,20 @@ void computeRegions(DecoderWorkspace& ws)
             corrected[i] = ((Floats{} + mLanes[i][0] * median[0]) + mLanes[i][1] * median[1]) + mLanes[i][2] * median[2];
         for (int j = 0; j < 4; ++j) regions[r[j]].color = {corrected[0][j], corrected[1][j], corrected[2][j]};
     };
-    std::array<const std::uint32_t*, 4> smallPixels;
-    std::array<int, 4> smallCounts, small;  // the regions waiting for a group of 4
-    int waiting = 0;
+    // Regions of up to 255 pixels wait in a bucket per block count (1-64)
+    // for a group of four (channelMediansOfFourAlike walks their blocks
+    // together, one jump per pass for the four); those left over at the end
+    // go four at a time to channelMediansOfFour, the last up to 3 alone
+    // (780x580 regions 9.38 -> 9.17 M instructions per decode; 1388x1038
+    // 23.98 -> 23.71 M, their indirect jumps' mispredictions 9.1 -> 2.6 k).
+    struct Bucket {
+        std::array<const std::uint32_t*, 4> pixels;
+        std::array<int, 4> counts, regions;
+        int waiting = 0;
+    };
+    std::array<Bucket, 64> buckets;
     auto pad = [&](int r) {
-        constexpr std::uint64_t zeros = 0x8080808080808080u;
+        constexpr std::uint64_t zeros = kRegionByteBias * 0x0101010101010101u;
         auto* end = reinterpret_cast<std::uint32_t*>(next[r]);
         std::memcpy(end, &zeros, 8);
         std::memcpy(end + 2, &zeros, 4);
@@ -280,16 +319,28 @@ void computeRegions(DecoderWorkspace& ws)
         if (size > 255) {
             setColor(r, channelMedians(pixels, size));
         } else {
-            smallPixels[waiting] = pixels;
-            smallCounts[waiting] = size;
-            small[waiting] = r;
-            if (++waiting == 4) {
-                setColorsOfFour(small, channelMediansOfFour(smallPixels, smallCounts));
-                waiting = 0;
+            Bucket& bucket = buckets[(size - 1) / 4];
+            bucket.pixels[bucket.waiting] = pixels;
+            bucket.counts[bucket.waiting] = size;
+            bucket.regions[bucket.waiting] = r;
+            if (++bucket.waiting == 4) {
+                setColorsOfFour(bucket.regions, channelMediansOfFourAlike(bucket.pixels, bucket.counts));
+                bucket.waiting = 0;
             }
         }
     }
-    for (int j = 0; j < waiting; ++j) setColor(small[j], channelMedians(smallPixels[j], smallCounts[j]));
+    Bucket left;
+    for (const Bucket& bucket : buckets)
+        for (int j = 0; j < bucket.waiting; ++j) {
+            left.pixels[left.waiting] = bucket.pixels[j];
+            left.counts[left.waiting] = bucket.counts[j];
+            left.regions[left.waiting] = bucket.regions[j];
+            if (++left.waiting == 4) {
+                setColorsOfFour(left.regions, channelMediansOfFour(left.pixels, left.counts));
+                left.waiting = 0;
+            }
+        }
+    for (int j = 0; j < left.waiting; ++j) setColor(left.regions[j], channelMedians(left.pixels[j], left.counts[j]));
 }
 
 }  // namespace stria::pipeline

@@ -125,18 +125,31 @@ void projectedGradientWindows(const std::uint8_t* row, int width, const std::int
                               const cv::Matx33f& m, std::array<float, kWindowSamples + 1>* out);
 
 // Region colours (regions.cpp): per byte k < 3 of count >= 1 pixels of 4
-// bytes (a frame pixel's 3 and one more, each stored as value ^ 0x80: signed
-// bytes in the values' order), the median of the pixels' values k: the value
+// bytes (a frame pixel's 3 and one more, each stored as value ^
+// kRegionByteBias), the median of the pixels' values k: the value
 // at index count / 2 of them sorted. channelMedians reads whole
 // blocks of 4 pixels, the last one whole: the entries after the last pixel up
-// to the next multiple of 4 must hold the value 0 in bytes 0-2 (0x80 stored),
+// to the next multiple of 4 must hold the value 0 in bytes 0-2 (kRegionByteBias stored),
 // which is below every value the search compares with (and not counted).
+// The bytes' bias: each stored as value ^ kRegionByteBias. 0x80 on x86
+// (SSE2 has only signed byte compares: the bias orders the values as signed
+// bytes), 0 on NEON, whose unsigned compares take the raw bytes (the copy
+// pass without its xor).
+#if defined(__ARM_NEON)
+inline constexpr std::uint8_t kRegionByteBias = 0;
+#else
+inline constexpr std::uint8_t kRegionByteBias = 0x80;
+#endif
 std::array<std::uint8_t, 3> channelMediansReference(const std::uint32_t* pixels, int count);
 std::array<std::uint8_t, 3> channelMedians(const std::uint32_t* pixels, int count);
 // The same for four regions at once, faster where each has up to 255 pixels:
 // region j's medians in bytes 0-2 of dword j (byte 3 zero).
 std::array<std::uint32_t, 4> channelMediansOfFour(const std::array<const std::uint32_t*, 4>& pixels,
                                                   const std::array<int, 4>& counts);
+// The same for four regions of 1-255 pixels with the same number of blocks
+// of 4 ((count + 3) / 4 equal), their blocks walked together.
+std::array<std::uint32_t, 4> channelMediansOfFourAlike(const std::array<const std::uint32_t*, 4>& pixels,
+                                                       const std::array<int, 4>& counts);
 
 // Region statistics and graph (regions.cpp, graph.cpp). Bit i of the result
 // is set where a[i] != b[i], for i < count <= 64: with b = a + 1 the borders

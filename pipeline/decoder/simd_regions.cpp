@@ -17,7 +17,7 @@ std::array<std::uint8_t, 3> channelMediansReference(const std::uint32_t* pixels,
     std::array<std::uint8_t, 3> median{};
     for (int k = 0; k < 3; ++k) {
         std::array<std::int32_t, 256> histogram{};
-        for (int i = 0; i < count; ++i) ++histogram[bytes[4 * i + k] ^ 0x80];
+        for (int i = 0; i < count; ++i) ++histogram[bytes[4 * i + k] ^ kRegionByteBias];
         int v = 0;
         for (int seen = histogram[0]; seen <= count / 2; seen += histogram[++v]) {}
         median[k] = static_cast<std::uint8_t>(v);
@@ -34,7 +34,8 @@ alignas(16) constexpr std::uint8_t kThreeBytes[16] = {255, 255, 255, 0, 255, 255
 // count / 2 values below t: found bit by bit from the top, each step one
 // counting pass over the pixels (4 pixels' 3 channels per compare, no
 // branch per value; a region's ~256 bytes stay in L1 for the 8 passes).
-// The pixels' bytes are the values ^ 0x80 (the copy pass stores them so):
+// The pixels' bytes are the values ^ kRegionByteBias (the copy pass stores
+// them so; on x86 0x80, on NEON 0 and the compares unsigned):
 // the compares count the values at least t as signed bytes greater than
 // (t - 1) ^ 0x80, 3 instructions per block with SSE2 (load, compare,
 // subtract), where an unsigned compare took 4 (780x580 medians 6.09 ->
@@ -96,13 +97,12 @@ inline Bytes zeroBytes() { return vdupq_n_u8(0); }
 inline Bytes add(Bytes a, Bytes b) { return vaddq_u8(a, b); }
 inline Bytes sub(Bytes a, Bytes b) { return vsubq_u8(a, b); }
 inline Bytes bitAnd(Bytes a, Bytes b) { return vandq_u8(a, b); }
-// All ones in the lanes of x at least the limit's t: x > t - 1 as signed
-// bytes (x = value ^ 0x80, the limit is (t - 1) ^ 0x80 = t + 0x7f).
-inline Bytes atLeast(const std::uint8_t* x, Bytes limit)
-{
-    return vcgtq_s8(vreinterpretq_s8_u8(vld1q_u8(x)), vreinterpretq_s8_u8(limit));
-}
-inline Bytes limitOf(std::uint32_t t) { return vaddq_u8(vreinterpretq_u8_u32(vdupq_n_u32(t)), vdupq_n_u8(0x7f)); }
+// All ones in the lanes of x at least the limit's t: x > t - 1 as unsigned
+// bytes (x the raw value: kRegionByteBias is 0 on NEON; the limit is t - 1 =
+// t + 0xff), where the signed compare of x86 took the copy's xor per block.
+static_assert(kRegionByteBias == 0);
+inline Bytes atLeast(const std::uint8_t* x, Bytes limit) { return vcgtq_u8(vld1q_u8(x), limit); }
+inline Bytes limitOf(std::uint32_t t) { return vaddq_u8(vreinterpretq_u8_u32(vdupq_n_u32(t)), vdupq_n_u8(0xff)); }
 // Each byte position's sum over the four pixels, in 16 bits.
 inline std::array<int, 3> pixelSums(Bytes counts)
 {
@@ -120,7 +120,7 @@ struct ByteSearch {
 };
 inline Bytes firstBit() { return vdupq_n_u8(128); }
 inline Bytes nextBit(Bytes bit) { return vshrq_n_u8(bit, 1); }
-inline Bytes searchLimit(const ByteSearch& s, Bytes bit) { return vaddq_u8(vorrq_u8(s.m, bit), vdupq_n_u8(0x7f)); }
+inline Bytes searchLimit(const ByteSearch& s, Bytes bit) { return vaddq_u8(vorrq_u8(s.m, bit), vdupq_n_u8(0xff)); }
 inline void searchStep(ByteSearch& s, Bytes bit, Bytes counts)
 {
     counts = vaddq_u8(counts, vextq_u8(counts, counts, 8));
@@ -132,7 +132,7 @@ inline std::array<std::uint8_t, 3> searchResult(const ByteSearch& s)
     return {vgetq_lane_u8(s.m, 0), vgetq_lane_u8(s.m, 1), vgetq_lane_u8(s.m, 2)};
 }
 // Four regions' searches in the 4-byte lanes (dwords) j of one vector each.
-inline Bytes limitsOf(Bytes m, Bytes bit) { return vaddq_u8(vorrq_u8(m, bit), vdupq_n_u8(0x7f)); }
+inline Bytes limitsOf(Bytes m, Bytes bit) { return vaddq_u8(vorrq_u8(m, bit), vdupq_n_u8(0xff)); }
 template <int j>
 inline Bytes dwordOf(Bytes v)
 {
@@ -180,7 +180,8 @@ inline Bytes add(Bytes a, Bytes b) { return _mm_add_epi8(a, b); }
 inline Bytes sub(Bytes a, Bytes b) { return _mm_sub_epi8(a, b); }
 inline Bytes bitAnd(Bytes a, Bytes b) { return _mm_and_si128(a, b); }
 // All ones in the lanes of x at least the limit's t: x > t - 1 as signed
-// bytes (x = value ^ 0x80, the limit is (t - 1) ^ 0x80 = t + 0x7f). SSE2 has
+// bytes (x = value ^ kRegionByteBias = value ^ 0x80, the limit is (t - 1) ^
+// 0x80 = t + 0x7f). SSE2 has
 // no unsigned byte comparison: max(x, t - 1) == t - 1 on the values took one
 // instruction more per block (a copy of the limit or of x).
 inline Bytes atLeast(const std::uint8_t* x, Bytes limit) { return _mm_cmpgt_epi8(loadBytes(x), limit); }
@@ -470,6 +471,47 @@ std::array<std::uint32_t, 4> channelMediansOfFour(const std::array<const std::ui
         medians[j] = v[0] | v[1] << 8 | v[2] << 16;
     }
     return medians;
+}
+
+std::array<std::uint32_t, 4> channelMediansOfFourAlike(const std::array<const std::uint32_t*, 4>& pixels,
+                                                       const std::array<int, 4>& counts)
+{
+#if defined(__ARM_NEON) || defined(__SSE2__)
+    // As channelMediansOfFour, the four regions' blocks in one walk per pass:
+    // block b of each region in turn, one accumulator per region (four
+    // independent chains), one jump per pass where channelMediansOfFour's
+    // four walks took four, each to its own region's target (mispredicted
+    // where the four differ).
+    const int blocks = (counts[0] + 3) / 4;
+    std::array<const std::uint8_t*, 4> bytes;
+    std::array<std::uint32_t, 4> needs;
+    for (int j = 0; j < 4; ++j) {
+        bytes[j] = reinterpret_cast<const std::uint8_t*>(pixels[j]);
+        const auto n = static_cast<std::uint32_t>(counts[j]);  // >= 1
+        needs[j] = (n - n / 2) * 0x01010101u;
+    }
+    const Bytes need = dwordsOf(needs);
+    const std::uint8_t *p0 = bytes[0], *p1 = bytes[1], *p2 = bytes[2], *p3 = bytes[3];
+    Bytes m = zeroBytes(), bit = firstBit();
+    for (int pass = 0; pass < 8; ++pass, bit = nextBit(bit)) {
+        const Bytes limits = limitsOf(m, bit);
+        const Bytes l0 = dwordOf<0>(limits), l1 = dwordOf<1>(limits), l2 = dwordOf<2>(limits),
+                    l3 = dwordOf<3>(limits);
+        Bytes c0 = zeroBytes(), c1 = zeroBytes(), c2 = zeroBytes(), c3 = zeroBytes();
+        // Inlined in all 64 cases (GCC otherwise calls it from some, its
+        // accumulators in memory).
+        forBlocksDown(blocks, [&](int b) __attribute__((always_inline)) {
+            c0 = sub(c0, atLeast(p0 + 16 * b, l0));
+            c1 = sub(c1, atLeast(p1 + 16 * b, l1));
+            c2 = sub(c2, atLeast(p2 + 16 * b, l2));
+            c3 = sub(c3, atLeast(p3 + 16 * b, l3));
+        });
+        m = stepOfFour(m, bit, sumsOfFour(c0, c1, c2, c3), need);
+    }
+    return dwords(bitAnd(m, loadBytes(kThreeBytes)));
+#else
+    return channelMediansOfFour(pixels, counts);
+#endif
 }
 
 }  // namespace stria::pipeline

@@ -147,7 +147,7 @@ TEST(DecoderKernels, EdgeLocationGradientsEqualReferenceOnSimulatorFrame)
 // the 16-bit lanes' search, the 64-block steps of the chunks' loop and the
 // 254 blocks of one chunk), of random bytes, of
 // few distinct values (ties at the median) and of the extremes 0 and 255.
-// Each region's pixels are followed by 3 entries of the value 0 (0x80
+// Each region's pixels are followed by 3 entries of the value 0 (kRegionByteBias
 // stored), as the kernels require.
 int regionMediansDiffering(unsigned seed)
 {
@@ -155,7 +155,7 @@ int regionMediansDiffering(unsigned seed)
     std::vector<std::uint32_t> pixels(40000 + 3);
     int differing = 0;
     std::vector<std::uint32_t> other(3 * (255 + 3));
-    auto pad = [](std::uint32_t* end) { std::fill(end, end + 3, 0x80808080u); };
+    auto pad = [](std::uint32_t* end) { std::fill(end, end + 3, kRegionByteBias * 0x01010101u); };
     auto compare = [&](int count) {
         pad(pixels.data() + count);
         differing += channelMedians(pixels.data(), count) != channelMediansReference(pixels.data(), count);
@@ -170,6 +170,22 @@ int regionMediansDiffering(unsigned seed)
         for (int j = 0; j < 4; ++j) {
             const std::array<std::uint8_t, 3> v = channelMediansReference(regions[j], counts[j]);
             differing += medians[j] != static_cast<std::uint32_t>(v[0] | v[1] << 8 | v[2] << 16);
+        }
+        if (count > 255) return;
+        // The kernel for four regions of as many blocks: this one, then three
+        // of random counts with the same (count + 3) / 4.
+        const int first = count - (count - 1) % 4;  // 1, 5, 9, ..: the block count's smallest
+        const std::array<int, 4> alike{count, first + static_cast<int>(rng() % 4), first + static_cast<int>(rng() % 4),
+                                       first + static_cast<int>(rng() % 4)};
+        std::array<int, 4> clamped = alike;
+        for (int j = 1; j < 4; ++j) {
+            clamped[j] = std::min(alike[j], 255);
+            pad(other.data() + 258 * (j - 1) + clamped[j]);
+        }
+        const auto alikeMedians = channelMediansOfFourAlike(regions, clamped);
+        for (int j = 0; j < 4; ++j) {
+            const std::array<std::uint8_t, 3> v = channelMediansReference(regions[j], clamped[j]);
+            differing += alikeMedians[j] != static_cast<std::uint32_t>(v[0] | v[1] << 8 | v[2] << 16);
         }
     };
     for (int count : {1, 2, 3, 4, 5, 63, 64, 65, 252, 255, 256, 257, 511, 512, 516, 771, 1016, 1019, 1020, 1021,
@@ -193,9 +209,9 @@ TEST(DecoderKernels, RegionMediansMatchReference)
 {
     EXPECT_EQ(regionMediansDiffering(7u), 0);
     // The reference itself: byte k's value at index count / 2 of the sorted
-    // (the bytes stored as value ^ 0x80).
+    // (the bytes stored as value ^ kRegionByteBias).
     std::array<std::uint32_t, 6> pixels{0x000109u, 0x010203u, 0x0203c8u, 0x030403u, 0x040507u, 0x0506ffu};
-    for (std::uint32_t& p : pixels) p ^= 0x808080u;
+    for (std::uint32_t& p : pixels) p ^= kRegionByteBias * 0x010101u;
     EXPECT_EQ(channelMediansReference(pixels.data(), 6), (std::array<std::uint8_t, 3>{9, 4, 3}));
     EXPECT_EQ(channelMediansReference(pixels.data(), 5), (std::array<std::uint8_t, 3>{7, 3, 2}));
     EXPECT_EQ(channelMediansReference(pixels.data(), 1), (std::array<std::uint8_t, 3>{9, 1, 0}));
