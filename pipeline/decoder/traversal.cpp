@@ -719,10 +719,15 @@ private:
     {
         const StripePattern& pattern = ws_.pattern;
         const int window = pattern.window();
-        std::int32_t* runs = ws_.componentSize.get();  // left run in the low, right run in the high 16 bits
-        for (int v = 0; v < ws_.regionCount; ++v) runs[v] = 0;
-        auto left = [&](int v) { return runs[v] & 0xffff; };
-        auto right = [&](int v) { return runs[v] >> 16; };
+        // The runs to the left and to the right, one byte each (window() <=
+        // 13), in two arrays in the component sizes' storage (4 bytes per
+        // region): the sweeps update them without a branch (max), where
+        // the packed words' two tests mispredicted (which link extends a
+        // run is data), and count the changes by a sum.
+        const int regionCount = ws_.regionCount;
+        std::uint8_t* left = reinterpret_cast<std::uint8_t*>(ws_.componentSize.get());
+        std::uint8_t* right = left + regionCount;
+        std::fill(left, left + 2 * static_cast<std::ptrdiff_t>(regionCount), std::uint8_t{0});
         // The links weighEvidence() listed, less those of regions undecoded
         // since (in place, in edge order, without a branch: which remain is
         // data): the sweeps visit only them, without reading the edges again.
@@ -734,30 +739,27 @@ private:
             pairs[2 * linkCount + 1] = hi;
             linkCount += (stripes_[lo] >= 0) & (stripes_[hi >> 1] >= 0);
         }
-        // The sweeps keep their branches: late sweeps change few runs, and
-        // the fan, which sweeps to the limit, took 3 M instructions more
-        // per decode without them, for no time won.
+        // The same updates in the same order as the scalar form
+        //   if (newRight > right(lo)) { right(lo) = newRight; changed = true; }
+        //   if (newLeft > left(hi)) { left(hi) = newLeft; changed = true; }
+        // (a run only grows, so max() stores what the test stored).
         for (int sweep = 0; sweep < 2 * window + 2; ++sweep) {
-            bool changed = false;
+            int changed = 0;
             for (int i = 0; i < linkCount; ++i) {
                 const int lo = pairs[2 * i], hi = pairs[2 * i + 1] >> 1, add = pairs[2 * i + 1] & 1;
-                const int newRight = std::min(window, right(hi) + add), newLeft = std::min(window, left(lo) + add);
-                if (newRight > right(lo)) {
-                    runs[lo] = (newRight << 16) | left(lo);
-                    changed = true;
-                }
-                if (newLeft > left(hi)) {
-                    runs[hi] = (right(hi) << 16) | newLeft;
-                    changed = true;
-                }
+                const int newRight = std::min(window, right[hi] + add), oldRight = right[lo];
+                right[lo] = static_cast<std::uint8_t>(std::max(oldRight, newRight));
+                changed += newRight > oldRight;
+                const int newLeft = std::min(window, left[lo] + add), oldLeft = left[hi];
+                left[hi] = static_cast<std::uint8_t>(std::max(oldLeft, newLeft));
+                changed += newLeft > oldLeft;
             }
-            if (!changed) break;
+            if (changed == 0) break;
         }
-        const int regionCount = ws_.regionCount;
         for (int v = 0; v < regionCount; ++v) {
             const int stripe = stripes_[v];
-            const bool unbounded = (pattern.color(std::max(stripe, 0)) == 0) & ((left(v) == 0) | (right(v) == 0));
-            stripes_[v] = stripe | -static_cast<std::int32_t>((left(v) + right(v) < window) | unbounded);
+            const bool unbounded = (pattern.color(std::max(stripe, 0)) == 0) & ((left[v] == 0) | (right[v] == 0));
+            stripes_[v] = stripe | -static_cast<std::int32_t>((left[v] + right[v] < window) | unbounded);
         }
     }
 
