@@ -482,14 +482,17 @@ private:
             const EdgeDirection dir = directionFrom(features_[e], from, to);
             const Hypothesis h = bestHypothesis(from, to, e, dir, referenceWeight);
             if (h.stripe < 0) return true;  // (the filter ruled out to's own stripe)
-            int tokens = f.tokens;
-            if (h.error < A_) {
-                tokens = std::min(tokens + 1, ws_.params.tokenBucketSize);
-            } else if (tokens > 0 && h.error < ws_.params.tokenErrorLimit) {
-                --tokens;
-            } else {
-                return true;
-            }
+            // Below A an edge earns a token (up to the bucket), else up to
+            // tokenErrorLimit it spends one, if there is one: as one branch
+            // (which case is data) and one update. The scalar form:
+            //   if (error < A) tokens = min(tokens + 1, bucket);
+            //   else if (tokens > 0 && error < tokenErrorLimit) --tokens;
+            //   else reject.
+            // tokens <= bucket (every entry's tokens came from here or from
+            // min(length - 1, bucket)), so min() leaves tokens - 1 as it is.
+            const bool good = h.error < A_;
+            if (!(good | ((f.tokens > 0) & (h.error < ws_.params.tokenErrorLimit)))) return true;
+            const int tokens = std::min(f.tokens + 2 * static_cast<int>(good) - 1, ws_.params.tokenBucketSize);
             if (ws_.openCount == ws_.maxOpen) {
                 ws_.truncated = true;
                 return false;
