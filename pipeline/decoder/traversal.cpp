@@ -726,7 +726,7 @@ private:
         // 13), in two arrays in the component sizes' storage (4 bytes per
         // region): the sweeps update them without a branch (max), where
         // the packed words' two tests mispredicted (which link extends a
-        // run is data), and count the changes by a sum.
+        // run is data), and note a change by an OR.
         const int regionCount = ws_.regionCount;
         std::uint8_t* left = reinterpret_cast<std::uint8_t*>(ws_.componentSize.get());
         std::uint8_t* right = left + regionCount;
@@ -747,15 +747,14 @@ private:
         //   if (newLeft > left(hi)) { left(hi) = newLeft; changed = true; }
         // (a run only grows, so max() stores what the test stored).
         for (int sweep = 0; sweep < 2 * window + 2; ++sweep) {
-            int changed = 0;
+            int changed = 0;  // nonzero when a run grew: the OR of new ^ old
             for (int i = 0; i < linkCount; ++i) {
                 const int lo = pairs[2 * i], hi = pairs[2 * i + 1] >> 1, add = pairs[2 * i + 1] & 1;
-                const int newRight = std::min(window, right[hi] + add), oldRight = right[lo];
-                right[lo] = static_cast<std::uint8_t>(std::max(oldRight, newRight));
-                changed += newRight > oldRight;
-                const int newLeft = std::min(window, left[lo] + add), oldLeft = left[hi];
-                left[hi] = static_cast<std::uint8_t>(std::max(oldLeft, newLeft));
-                changed += newLeft > oldLeft;
+                const int oldRight = right[lo], grownRight = std::max(oldRight, std::min(window, right[hi] + add));
+                right[lo] = static_cast<std::uint8_t>(grownRight);
+                const int oldLeft = left[hi], grownLeft = std::max(oldLeft, std::min(window, left[lo] + add));
+                left[hi] = static_cast<std::uint8_t>(grownLeft);
+                changed |= (grownRight ^ oldRight) | (grownLeft ^ oldLeft);
             }
             if (changed == 0) break;
         }
