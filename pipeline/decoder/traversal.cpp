@@ -749,7 +749,9 @@ private:
         for (int sweep = 0; sweep < 2 * window + 2; ++sweep) {
             int changed = 0;  // nonzero when a run grew: the OR of new ^ old
             for (int i = 0; i < linkCount; ++i) {
-                const int lo = pairs[2 * i], hi = pairs[2 * i + 1] >> 1, add = pairs[2 * i + 1] & 1;
+                // (unsigned: the indices need no sign extension)
+                const std::uint32_t lo = pairs[2 * i], hi = static_cast<std::uint32_t>(pairs[2 * i + 1]) >> 1;
+                const int add = pairs[2 * i + 1] & 1;
                 const int oldRight = right[lo], grownRight = std::max(oldRight, std::min(window, right[hi] + add));
                 right[lo] = static_cast<std::uint8_t>(grownRight);
                 const int oldLeft = left[hi], grownLeft = std::max(oldLeft, std::min(window, left[lo] + add));
