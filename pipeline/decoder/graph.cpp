@@ -52,12 +52,14 @@ PairGradient pairGradient(const FrameView& frame, int x, int y, bool horizontal,
 
 namespace {
 
-// A constant made opaque to GCC, which then keeps it in a register (x86-64:
+// A value made opaque to GCC (a constant, or a pointer it would fold back
+// into another), which then keeps it in a register (x86-64:
 // or as an instruction's memory operand) in buildGraph's pair loops rather
 // than building it again for each pair: a 64-bit constant is 2-4
 // instructions on AArch64, a movabs on x86-64 (780x580, x86-64: graph stage
 // 11.10 -> 10.97 M instructions).
-[[gnu::always_inline]] inline void hide(std::uint64_t& value)
+template <typename T>
+[[gnu::always_inline]] inline void hide(T& value)
 {
     asm("" : "+r"(value));
 }
@@ -358,7 +360,10 @@ void buildGraph(DecoderWorkspace& ws)
             const std::int32_t* rowAt = row;
             const std::uint8_t *upAt = up, *pixelsAt = pixels, *downAt = down;
             auto horizontalPairs = [&](std::uint64_t bits) {
-                asm("" : "+r"(rowAt), "+r"(upAt), "+r"(pixelsAt), "+r"(downAt));
+                hide(rowAt);
+                hide(upAt);
+                hide(pixelsAt);
+                hide(downAt);
                 for (; bits; bits &= bits - 1) {
                     const std::size_t x = static_cast<unsigned>(std::countr_zero(bits));
                     addPair(labelPair(rowAt + x), horizontal,

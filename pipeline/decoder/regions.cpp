@@ -301,6 +301,15 @@ void computeRegions(DecoderWorkspace& ws)
         std::array<const std::uint32_t*, 4> pixels;
         std::array<int, 4> counts, regions;
         int waiting = 0;
+        // Adds a region; true when the bucket then holds four (the caller
+        // takes them and sets waiting to 0).
+        bool add(const std::uint32_t* regionPixels, int count, int region)
+        {
+            pixels[waiting] = regionPixels;
+            counts[waiting] = count;
+            regions[waiting] = region;
+            return ++waiting == 4;
+        }
     };
     std::array<Bucket, 64> buckets;
     auto pad = [&](int r) {
@@ -320,10 +329,7 @@ void computeRegions(DecoderWorkspace& ws)
             setColor(r, channelMedians(pixels, size));
         } else {
             Bucket& bucket = buckets[(size - 1) / 4];
-            bucket.pixels[bucket.waiting] = pixels;
-            bucket.counts[bucket.waiting] = size;
-            bucket.regions[bucket.waiting] = r;
-            if (++bucket.waiting == 4) {
+            if (bucket.add(pixels, size, r)) {
                 setColorsOfFour(bucket.regions, channelMediansOfFourAlike(bucket.pixels, bucket.counts));
                 bucket.waiting = 0;
             }
@@ -332,10 +338,7 @@ void computeRegions(DecoderWorkspace& ws)
     Bucket left;
     for (const Bucket& bucket : buckets)
         for (int j = 0; j < bucket.waiting; ++j) {
-            left.pixels[left.waiting] = bucket.pixels[j];
-            left.counts[left.waiting] = bucket.counts[j];
-            left.regions[left.waiting] = bucket.regions[j];
-            if (++left.waiting == 4) {
+            if (left.add(bucket.pixels[j], bucket.counts[j], bucket.regions[j])) {
                 setColorsOfFour(left.regions, channelMediansOfFour(left.pixels, left.counts));
                 left.waiting = 0;
             }
