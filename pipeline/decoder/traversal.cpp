@@ -24,8 +24,10 @@
 #include <algorithm>
 #include <array>
 #include <bit>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <utility>
 
 namespace stria::pipeline {
@@ -77,6 +79,25 @@ SymbolCode bestSymbolFrom(const EdgeFeature& edge, int from, int to)
     return static_cast<SymbolCode>(fromA * symbol + !fromA * reversedSymbol(symbol));
 }
 
+// The least float not below x: a float is below x exactly when it is below
+// this one (a float below x is below it; one not below x is not below it,
+// the least such; NaN stays NaN), so a float compared with a double limit
+// compares with this float instead, without a conversion each time.
+float leastFloatNotBelow(double x)
+{
+    const float f = static_cast<float>(x);  // the nearest float
+    return f < x ? std::nextafter(f, std::numeric_limits<float>::infinity()) : f;
+}
+
+// The same for x >= 0 (or NaN), without a branch (x is data): the next float
+// up from a float >= +0 is the one of its bits + 1.
+float leastFloatNotBelowNonNegative(double x)
+{
+    const float f = static_cast<float>(x);
+    const float up = std::bit_cast<float>(std::bit_cast<std::uint32_t>(f) + 1);
+    return f < x ? up : f;
+}
+
 // Pattern symbol seen when walking from stripe `from` to the neighbouring stripe `to`.
 SymbolCode stripeSymbol(const StripePattern& pattern, int from, int to)
 {
@@ -100,7 +121,7 @@ public:
     explicit Traversal(DecoderWorkspace& ws)
         : ws_(ws), features_(ws.edgeFeatures.get()), t_(static_cast<float>(ws.params.t)), scales_(t_),
           alpha_(static_cast<float>(ws.params.alpha)), A_(static_cast<float>(ws.params.A)),
-          beta_(static_cast<float>(ws.params.beta))
+          beta_(static_cast<float>(ws.params.beta)), tokenErrorLimit_(leastFloatNotBelow(ws.params.tokenErrorLimit))
     {
     }
 
@@ -460,7 +481,9 @@ private:
         // a neighbour that holds it already needs no error evaluated (most
         // neighbours of a decoded region, in the interior of a pass). Along
         // them, a weak edge is a null edge if the reference is one stripe off.
-        const double weakBelow = ws_.params.nullEdgeRatio * referenceWeight;
+        // (weakBelow: the product's least float not below, so an edge's
+        // weight compares without a conversion; nullEdgeRatio >= 0.)
+        const float weakBelow = leastFloatNotBelowNonNegative(ws_.params.nullEdgeRatio * referenceWeight);
         const int refStripe = f.reference >= 0 ? stripes_[f.reference] : -1;
         const bool nullEdges = refStripe >= 0 && std::abs(refStripe - f.stripe) == 1;
         const int stripe = f.stripe, stripeCount = ws_.pattern.stripeCount();
@@ -491,7 +514,7 @@ private:
             // tokens <= bucket (every entry's tokens came from here or from
             // min(length - 1, bucket)), so min() leaves tokens - 1 as it is.
             const bool good = h.error < A_;
-            if (!(good | ((f.tokens > 0) & (h.error < ws_.params.tokenErrorLimit)))) return true;
+            if (!(good | ((f.tokens > 0) & (h.error < tokenErrorLimit_)))) return true;
             const int tokens = std::min(f.tokens + 2 * static_cast<int>(good) - 1, ws_.params.tokenBucketSize);
             if (ws_.openCount == ws_.maxOpen) {
                 ws_.truncated = true;
@@ -804,6 +827,10 @@ private:
     const float t_;
     const MatchScales scales_;
     const float alpha_, A_, beta_;
+    // params.tokenErrorLimit for pushNeighbours' token test (the same
+    // comparisons: leastFloatNotBelow; weighEvidence's limit is the
+    // nearest float, as it always was).
+    const float tokenErrorLimit_;
     std::int32_t* stripes_ = nullptr;  // the regions' stripes (run)
     std::int32_t* components_ = nullptr;  // and components, as the records' (run)
 };
