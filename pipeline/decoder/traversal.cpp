@@ -363,18 +363,16 @@ private:
                 };
                 forEachEdgeWhere(endRegion, extends, [&](int e, int next) {
                     const EdgeFeature& edge = features_[e];
-                    // All the needed symbols' errors evaluated before any is
-                    // compared, so that their chains of divisions overlap.
-                    std::array<float, kSymbolCount> errors;
-                    for (int k = 0; k < neededCount; ++k)
-                        errors[k] = symbolMatch(edge, endRegion, next, needed[k]) + alpha_ * edge.gradientError;
+                    // The best kept by selects, not a branch, so that the
+                    // symbols' chains of divisions overlap (and one loop, not
+                    // two, ends per edge).
                     for (int k = 0; k < neededCount; ++k) {
-                        if (errors[k] < bestError) {
-                            bestError = errors[k];
-                            bestRegion = next;
-                            bestLeft = left;
-                            bestSymbol = needed[k];
-                        }
+                        const float error = symbolMatch(edge, endRegion, next, needed[k]) + alpha_ * edge.gradientError;
+                        const bool better = error < bestError;
+                        bestError = better ? error : bestError;
+                        bestRegion = better ? next : bestRegion;
+                        bestLeft = better ? left : bestLeft;
+                        bestSymbol = better ? needed[k] : bestSymbol;
                     }
                     return true;
                 });
