@@ -131,7 +131,7 @@ Result<std::unique_ptr<Decoder>> Decoder::create(const StripePattern& pattern, c
     ws->maxPoints = std::min<int>(ws->maxPoints, static_cast<int>(n * sizeof(std::int32_t) / sizeof(ScanPoint)));
     ws->edgeOrder = allocate<std::int32_t>(ws->maxEdges, bytes);
     ws->maxOpen = std::max(16, ws->maxEdges / 2);
-    ws->open = allocate<OpenEntry>(ws->maxOpen, bytes);
+    ws->open = allocate<OpenEntry>(ws->maxOpen + 1, bytes);  // and the heap's sentinel (traversal.cpp)
     ws->candidates = allocate<std::int32_t>(pattern.edgeCount(), bytes);
     ws->pathVertices = allocate<std::int32_t>(2 * (pattern.window() + 1) + 1, bytes);
     setFirstStepSymbols(*ws);

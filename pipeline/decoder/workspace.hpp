@@ -131,7 +131,7 @@ struct DecoderWorkspace {
     std::unique_ptr<std::int32_t[]> adjacency;  // 2 * maxEdges incident edge indices (CSR)
     std::unique_ptr<std::int32_t[]> edgeOrder;  // edges sorted by eq. 9's error (seeding order)
     int maxOpen = 0;
-    std::unique_ptr<OpenEntry[]> open;          // heap, maxOpen entries
+    std::unique_ptr<OpenEntry[]> open;          // heap, maxOpen entries after a sentinel
     int openCount = 0;
     std::unique_ptr<std::int32_t[]> candidates;  // seeding: candidate pattern positions (edgeCount);
                                                  // depth: each edge's point in the current row
