@@ -52,17 +52,10 @@ PairGradient pairGradient(const FrameView& frame, int x, int y, bool horizontal,
 
 namespace {
 
-// A value made opaque to GCC (a constant, or a pointer it would fold back
-// into another), which then keeps it in a register (x86-64:
-// or as an instruction's memory operand) in buildGraph's pair loops rather
-// than building it again for each pair: a 64-bit constant is 2-4
-// instructions on AArch64, a movabs on x86-64 (780x580, x86-64: graph stage
-// 11.10 -> 10.97 M instructions).
-template <typename T>
-[[gnu::always_inline]] inline void hide(T& value)
-{
-    asm("" : "+r"(value));
-}
+// (hide, simd.hpp: constants and pointers made opaque keep a register in
+// buildGraph's pair loops rather than being built again for each pair: a
+// 64-bit constant is 2-4 instructions on AArch64, a movabs on x86-64;
+// 780x580, x86-64: graph stage 11.10 -> 10.97 M instructions.)
 
 // The position of a mask word's lowest set bit, for bits != 0: the pair
 // loops' column in the word. On x86-64 one rep bsf into a 64-bit register

@@ -143,20 +143,20 @@ template <bool shuffled, bool threeBlocks>
             std::uint32_t* second = length > 4 ? out + 4 : sink;
             // Hidden from GCC, which would otherwise see the sink's stores
             // as dead and branch around the second block.
-            asm("" : "+r"(second));
+            hide(second);
             block(out, 0);
             block(second, 4);
             int i = 8;
             if constexpr (threeBlocks) {
                 std::uint32_t* third = length > 8 ? out + 8 : sink;
-                asm("" : "+r"(third));
+                hide(third);
                 block(third, 8);
                 i = 12;
             }
             // The loop's bound also hidden: GCC would otherwise branch on
             // length > 8 for both the third block and the loop.
             std::ptrdiff_t loopEnd = length;
-            asm("" : "+r"(loopEnd));
+            hide(loopEnd);
             for (; i < loopEnd; i += 4) block(out + i, i);
             x = end;
         };

@@ -41,6 +41,18 @@
 
 namespace stria::pipeline {
 
+// A value made opaque to GCC: an empty asm that may have changed it, in a
+// register. GCC then keeps it in a register rather than building a
+// constant again per iteration or folding a pointer back into another, and
+// cannot turn the select that made it into a branch on the select's
+// operands (graph.cpp's pair loops, the watershed's union, the region
+// copy's blocks).
+template <typename T>
+[[gnu::always_inline]] inline void hide(T& value)
+{
+    asm("" : "+r"(value));
+}
+
 #if defined(__aarch64__)
 // AArch64 has no movemask: bit i of the result is set where byte i of the 64
 // in m0..m3 (each byte 0 or 0xff) is set. Each byte keeps its own bit of its

@@ -104,14 +104,6 @@ std::size_t codeEntries(std::size_t pixels, std::size_t width)
     return bits;
 }
 
-// A value made opaque to GCC (as graph.cpp's hide), which then cannot turn
-// the select that made it into a branch on its operands.
-template <typename T>
-[[gnu::always_inline]] inline void opaque(T& value)
-{
-    asm("" : "+r"(value));
-}
-
 // Root of a provisional label: roots are their own parents, the others have
 // a smaller label. The first step is a load alone, without a branch (a root
 // stays): a join's labels are roots or one step from one (780x580: 57 % and
@@ -500,10 +492,10 @@ STRIA_X86_CLONES void computeWatershed(DecoderWorkspace& ws)
                 // b (where a == b, parent[a] = a as it was: with findRoot's
                 // branches gone, which had foretold it, that branch
                 // mispredicted 19 k times per 1388x1038 decode) nor on a < b
-                // (the smaller opaque, and the larger from it: GCC otherwise
-                // branched, 1 in 2 mispredicted).
+                // (the smaller hidden by hide, simd.hpp, and the larger from
+                // it: GCC otherwise branched, 1 in 2 mispredicted).
                 std::int32_t smaller = std::min(a, b);
-                opaque(smaller);
+                hide(smaller);
                 parent[a ^ b ^ smaller] = smaller;
                 joined += a != b;
             }
