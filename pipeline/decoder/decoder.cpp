@@ -20,13 +20,6 @@ double millisecondsSince(Clock::time_point& start)
     return ms;
 }
 
-template <typename T>
-std::unique_ptr<T[]> allocate(std::size_t count, std::size_t& bytes)
-{
-    bytes += count * sizeof(T);
-    return std::make_unique<T[]>(count);
-}
-
 std::string sizeName(int w, int h) { return std::to_string(w) + "x" + std::to_string(h); }
 
 Status validateParams(const DecoderParams& p)
@@ -68,28 +61,39 @@ std::size_t scratchEntries(int width, int height, int maxRegions, int maxEdges)
                      graphScratchEntries(maxRegions, maxEdges)});
 }
 
-std::size_t allocateFrameBuffers(DecoderWorkspace& ws)
+void reserveFrameBuffers(DecoderWorkspace& ws)
 {
-    std::size_t bytes = 0;
     const int w = ws.width, h = ws.height;
     const std::size_t n = static_cast<std::size_t>(w) * h;
     const std::size_t borderBytes = sizeof(std::uint64_t) * static_cast<std::size_t>(borderWords(w)) * h;
-    ws.gradient = allocate<std::uint8_t>(std::max(n, borderBytes), bytes);
-    ws.rowBorders = reinterpret_cast<std::uint64_t*>(ws.gradient.get());
-    ws.labels = allocate<std::int32_t>(n, bytes);
+    WorkspaceArena& arena = ws.arena;
+    arena.reserve(ws.gradient, std::max(n, borderBytes));
+    arena.reserve(ws.labels, n);
     ws.orderEntries = std::max<std::size_t>({watershedOrderEntries(w, h), regionOrderEntries(n, ws.maxRegions),
                                              graphTableEntries(ws.maxRegions, ws.maxEdges),
                                              sizeof(EdgeChange) / sizeof(std::int32_t) * ws.maxEdges});
-    ws.orderAndPoints = allocate<std::byte>(ws.orderEntries * sizeof(std::int32_t), bytes);
+    arena.reserve(ws.orderAndPoints, ws.orderEntries * sizeof(std::int32_t));
+    arena.reserve(ws.scratch, scratchEntries(w, h, ws.maxRegions, ws.maxEdges));
+    arena.reserve(ws.regions, static_cast<std::size_t>(ws.maxRegions));
+    arena.reserve(ws.edges, static_cast<std::size_t>(ws.maxEdges));
+    arena.reserve(ws.edgeFeatures, static_cast<std::size_t>(ws.maxEdges));
+    arena.reserve(ws.adjacency, 2 * static_cast<std::size_t>(ws.maxEdges));
+}
+
+std::size_t allocateWorkspace(DecoderWorkspace& ws)
+{
+    const std::size_t bytes = ws.arena.allocate();
+    ws.rowBorders = reinterpret_cast<std::uint64_t*>(ws.gradient.get());
     ws.pixelOrder = reinterpret_cast<std::int32_t*>(ws.orderAndPoints.get());
     ws.points = reinterpret_cast<ScanPoint*>(ws.orderAndPoints.get());
     ws.edgeChanges = reinterpret_cast<EdgeChange*>(ws.orderAndPoints.get());
-    ws.scratch = allocate<std::int32_t>(scratchEntries(w, h, ws.maxRegions, ws.maxEdges), bytes);
-    ws.regions = allocate<Region>(ws.maxRegions, bytes);
-    ws.edges = allocate<GraphEdge>(ws.maxEdges, bytes);
-    ws.edgeFeatures = allocate<EdgeFeature>(ws.maxEdges, bytes);
-    ws.adjacency = allocate<std::int32_t>(2 * static_cast<std::size_t>(ws.maxEdges), bytes);
     return bytes;
+}
+
+std::size_t allocateFrameBuffers(DecoderWorkspace& ws)
+{
+    reserveFrameBuffers(ws);
+    return allocateWorkspace(ws);
 }
 
 Decoder::Decoder(std::unique_ptr<DecoderWorkspace> workspace) : ws_(std::move(workspace)) {}
@@ -126,22 +130,25 @@ Result<std::unique_ptr<Decoder>> Decoder::create(const StripePattern& pattern, c
         return Status::error("decoder: " + std::to_string(ws->maxRegions) + " superpixels: at most " +
                              std::to_string(1 << EdgeFeature::kEndBits) + " are supported");
 
-    std::size_t& bytes = ws->allocatedBytes;
-    bytes += allocateFrameBuffers(*ws);
+    // Every array in one block (ws->arena, arena.hpp), planned, then allocated.
+    WorkspaceArena& arena = ws->arena;
+    reserveFrameBuffers(*ws);
     ws->maxPoints = std::min<int>(ws->maxPoints, static_cast<int>(n * sizeof(std::int32_t) / sizeof(ScanPoint)));
-    ws->edgeOrder = allocate<std::int32_t>(ws->maxEdges, bytes);
+    arena.reserve(ws->edgeOrder, static_cast<std::size_t>(ws->maxEdges));
     ws->maxOpen = std::max(16, ws->maxEdges / 2);
-    ws->open = allocate<OpenEntry>(ws->maxOpen + 1, bytes);  // and the heap's sentinel (traversal.cpp)
-    ws->candidates = allocate<std::int32_t>(pattern.edgeCount(), bytes);
-    ws->pathVertices = allocate<std::int32_t>(2 * (pattern.window() + 1) + 1, bytes);
-    setFirstStepSymbols(*ws);
-    ws->componentSize = allocate<std::int32_t>(ws->maxRegions, bytes);
-
-    ws->lightPlanes = allocate<Plane>(pattern.edgeCount(), bytes);
-    for (int k = 0; k < pattern.edgeCount(); ++k) ws->lightPlanes[k] = rig.lightPlaneForColumn(pattern.edgeColumn(k));
+    arena.reserve(ws->open, static_cast<std::size_t>(ws->maxOpen) + 1);  // and the heap's sentinel (traversal.cpp)
+    arena.reserve(ws->candidates, static_cast<std::size_t>(pattern.edgeCount()));
+    arena.reserve(ws->pathVertices, 2 * static_cast<std::size_t>(pattern.window() + 1) + 1);
+    arena.reserve(ws->componentSize, static_cast<std::size_t>(ws->maxRegions));
+    arena.reserve(ws->lightPlanes, static_cast<std::size_t>(pattern.edgeCount()));
     ws->rayGridWidth = std::max(2, (w - 1 + ws->rayGridStep - 1) / ws->rayGridStep + 1);
     ws->rayGridHeight = std::max(2, (h - 1 + ws->rayGridStep - 1) / ws->rayGridStep + 1);
-    ws->rayGrid = allocate<cv::Vec2f>(static_cast<std::size_t>(ws->rayGridWidth) * ws->rayGridHeight, bytes);
+    arena.reserve(ws->rayGrid, static_cast<std::size_t>(ws->rayGridWidth) * ws->rayGridHeight);
+    std::size_t& bytes = ws->allocatedBytes;
+    bytes = allocateWorkspace(*ws);
+
+    setFirstStepSymbols(*ws);
+    for (int k = 0; k < pattern.edgeCount(); ++k) ws->lightPlanes[k] = rig.lightPlaneForColumn(pattern.edgeColumn(k));
     for (int gy = 0; gy < ws->rayGridHeight; ++gy)
         for (int gx = 0; gx < ws->rayGridWidth; ++gx)
             ws->rayGrid[gy * ws->rayGridWidth + gx] =

@@ -12,6 +12,7 @@
 //   depth.cpp      sub-pixel stripe edges per row, ray/light-plane points
 
 #include "pipeline/decoder.hpp"
+#include "pipeline/decoder/arena.hpp"
 #include "pipeline/decoder/simd.hpp"
 
 #include <array>
@@ -96,20 +97,24 @@ struct DecoderWorkspace {
     cv::Matx33f colorCorrection;  // inverse of params.crosstalk (R G B)
     cv::Vec2f primary{1, 0};      // unit image direction of increasing projector column (epipolar)
 
+    // Owns the memory of every ArenaArray below (arena.hpp): one block,
+    // allocated by Decoder::create() (allocateWorkspace).
+    WorkspaceArena arena;
+
     // Per pixel.
-    std::unique_ptr<std::uint8_t[]> gradient;
+    ArenaArray<std::uint8_t> gradient;
     // In the gradient buffer, free after the watershed: each label row's
     // horizontal borders, borderWords(width) masks per row, bit x set where
     // label x differs from label x + 1; written by the regions stage, read by
     // the graph and depth stages (instead of comparing the labels again).
     std::uint64_t* rowBorders = nullptr;
-    std::unique_ptr<std::int32_t[]> labels;
+    ArenaArray<std::int32_t> labels;
     // One buffer, five uses in turn: the watershed's plateau queue and
     // union-find parents, then pixels sorted by label (regions), then the
     // graph's hash table of label pairs, then the edges' changes (edgeChanges
     // below), then the output points (depth). Points are 24 bytes, so
     // maxPoints = pixels / 6 fits exactly.
-    std::unique_ptr<std::byte[]> orderAndPoints;
+    ArenaArray<std::byte> orderAndPoints;
     // Its size in int32 entries: max(watershedOrderEntries, regionOrderEntries, graphTableEntries, 4 maxEdges).
     std::size_t orderEntries = 0;
     std::int32_t* pixelOrder = nullptr;
@@ -121,21 +126,21 @@ struct DecoderWorkspace {
     // Gradient row lanes, watershed descent codes, region sums, the graph
     // edges' label pairs, then the traversal's seed sort keys and links and its
     // regions' stripes and components, then the depth stage's region stripes.
-    std::unique_ptr<std::int32_t[]> scratch;
+    ArenaArray<std::int32_t> scratch;
 
     // Graph.
     int maxRegions = 0, maxEdges = 0, maxPoints = 0;
-    std::unique_ptr<Region[]> regions;
-    std::unique_ptr<GraphEdge[]> edges;
-    std::unique_ptr<EdgeFeature[]> edgeFeatures;  // per edge (edges.cpp)
-    std::unique_ptr<std::int32_t[]> adjacency;  // 2 * maxEdges incident edge indices (CSR)
-    std::unique_ptr<std::int32_t[]> edgeOrder;  // edges sorted by eq. 9's error (seeding order)
+    ArenaArray<Region> regions;
+    ArenaArray<GraphEdge> edges;
+    ArenaArray<EdgeFeature> edgeFeatures;  // per edge (edges.cpp)
+    ArenaArray<std::int32_t> adjacency;  // 2 * maxEdges incident edge indices (CSR)
+    ArenaArray<std::int32_t> edgeOrder;  // edges sorted by eq. 9's error (seeding order)
     int maxOpen = 0;
-    std::unique_ptr<OpenEntry[]> open;          // heap, maxOpen entries after a sentinel
+    ArenaArray<OpenEntry> open;          // heap, maxOpen entries after a sentinel
     int openCount = 0;
-    std::unique_ptr<std::int32_t[]> candidates;  // seeding: candidate pattern positions (edgeCount);
+    ArenaArray<std::int32_t> candidates;  // seeding: candidate pattern positions (edgeCount);
                                                  // depth: each edge's point in the current row
-    std::unique_ptr<std::int32_t[]> pathVertices;  // seeding: the path, window + 1 regions
+    ArenaArray<std::int32_t> pathVertices;  // seeding: the path, window + 1 regions
     // Seeding: per seed symbol and path end (1: left, 0: right), the symbols
     // the first step of a unique-path search needs there: those of the
     // stripe edges beyond each of the symbol's pattern edges, each once, in
@@ -149,12 +154,12 @@ struct DecoderWorkspace {
         std::uint32_t seen = 0;
     };
     std::array<std::array<FirstStepSymbols, 2>, kSymbolCount> firstStep{};
-    std::unique_ptr<std::int32_t[]> componentSize;  // per pass (<= maxRegions)
+    ArenaArray<std::int32_t> componentSize;  // per pass (<= maxRegions)
 
     // Geometry.
-    std::unique_ptr<Plane[]> lightPlanes;  // per pattern edge
+    ArenaArray<Plane> lightPlanes;  // per pattern edge
     int rayGridStep = 4, rayGridWidth = 0, rayGridHeight = 0;
-    std::unique_ptr<cv::Vec2f[]> rayGrid;  // undistorted normalised coordinates every rayGridStep px
+    ArenaArray<cv::Vec2f> rayGrid;  // undistorted normalised coordinates every rayGridStep px
 
     // Per-frame counts.
     int regionCount = 0, edgeCount = 0, pointCount = 0, passCount = 0, decodedRegions = 0;
@@ -187,11 +192,17 @@ std::size_t graphTableEntries(std::size_t regions, std::size_t edges);
 // the traversal's seed keys and link pairs (2 entries per edge) and depth's
 // region stripes fit in the graph's share.
 std::size_t scratchEntries(int width, int height, int maxRegions, int maxEdges);
-// Allocates the per-pixel buffers and the graph's (gradient and border masks,
+// Plans the per-pixel buffers and the graph's (gradient and border masks,
 // labels, the order buffer, scratch, regions, edges, edge features, incidence
-// lists) for ws.width x ws.height pixels, ws.maxRegions and ws.maxEdges,
-// sets orderEntries and the views into them, and returns their bytes: the
-// one sizing that create() and the stage tests share (decoder.cpp).
+// lists) in ws.arena for ws.width x ws.height pixels, ws.maxRegions and
+// ws.maxEdges, and sets orderEntries: the one sizing that create() and the
+// stage tests share (decoder.cpp).
+void reserveFrameBuffers(DecoderWorkspace& ws);
+// Allocates ws.arena with what was planned in it and sets the views into the
+// order buffer and the gradient buffer (pixelOrder, points, edgeChanges,
+// rowBorders); returns the arena's bytes.
+std::size_t allocateWorkspace(DecoderWorkspace& ws);
+// reserveFrameBuffers, then allocateWorkspace (the stage tests' workspace).
 std::size_t allocateFrameBuffers(DecoderWorkspace& ws);
 
 // Per symbol code, the expected sign (-1, 0, +1) of each channel:

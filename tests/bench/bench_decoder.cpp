@@ -13,6 +13,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <fstream>
 #include <memory>
 #include <string>
 #include <utility>
@@ -34,6 +35,24 @@ double median(std::vector<double> values)
     auto middle = values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2);
     std::nth_element(values.begin(), middle, values.end());
     return *middle;
+}
+
+// The process's anonymous memory in transparent huge pages, in bytes
+// (AnonHugePages in /proc/self/smaps_rollup; 0 where the kernel has none):
+// the decoder asks for them for its workspace (pipeline/decoder/arena.hpp).
+double hugePageBytes()
+{
+    std::ifstream in("/proc/self/smaps_rollup");
+    std::string key;
+    double kilobytes = 0;
+    while (in >> key) {
+        if (key == "AnonHugePages:") {
+            in >> kilobytes;
+            break;
+        }
+        in.ignore(1 << 10, '\n');
+    }
+    return 1024 * kilobytes;
 }
 
 // Median |z - true z| / true z over the points, at the pixel each was found in.
@@ -108,6 +127,7 @@ void decode(benchmark::State& state, FrameSize size)
     c["depth_err_rel"] = depthError;
     c["workspace_bytes"] = static_cast<double>(decoder->workspaceBytes());
     c["bytes_per_pixel"] = static_cast<double>(decoder->workspaceBytes()) / pixels;
+    c["huge_page_bytes"] = hugePageBytes();
     c["pixels"] = benchmark::Counter(pixels, benchmark::Counter::kIsIterationInvariantRate);
     // Stage medians from the decoder's own clock (StageTimings), in ms.
     const auto stage = [&](const char* name, double pipeline::StageTimings::*field) {

@@ -777,7 +777,8 @@ TEST(DecoderKernels, EdgeSymbolErrorsMatchThePerChannelLoopsBitwise)
     // dark ones below the brightness floor), whole digits (equal channels,
     // zero changes) among them; every symbol on every change.
     DecoderWorkspace ws(StripePattern::generate(40, 4, 8, 7).value(), DecoderParams{});
-    ws.regions = std::make_unique<Region[]>(2);
+    std::vector<Region> regions(2);
+    ws.regions = ArenaArray<Region>(regions.data());
     std::mt19937 random(7);
     std::uniform_real_distribution<float> colour(-10.0f, 270.0f);
     std::uniform_int_distribution<int> digit(0, 3);
@@ -813,9 +814,12 @@ TEST(DecoderKernels, EdgeStageMatchesTheOneEdgeFunctionsBitwise)
 {
     DecoderWorkspace ws(StripePattern::generate(40, 4, 8, 7).value(), DecoderParams{});
     constexpr int kRegions = 300, kEdges = 20003;  // not a multiple of the 4 lanes
-    ws.regions = std::make_unique<Region[]>(kRegions);
-    ws.edges = std::make_unique<GraphEdge[]>(kEdges);
-    ws.edgeFeatures = std::make_unique<EdgeFeature[]>(kEdges);
+    std::vector<Region> regions(kRegions);
+    std::vector<GraphEdge> edges(kEdges);
+    std::vector<EdgeFeature> features(kEdges);
+    ws.regions = ArenaArray<Region>(regions.data());
+    ws.edges = ArenaArray<GraphEdge>(edges.data());
+    ws.edgeFeatures = ArenaArray<EdgeFeature>(features.data());
     std::vector<EdgeChange> edgeChanges(kEdges);
     ws.edgeChanges = edgeChanges.data();
     ws.edgeCount = kEdges;
