@@ -111,6 +111,10 @@ public:
     void fillDepthMap(cv::Mat& depth) const;
     // Everything allocated by create(), excluding the input frame.
     std::size_t workspaceBytes() const;
+    // Whether the kernel took the advice to back the workspace with
+    // transparent huge pages (Linux; pipeline/decoder/arena.hpp): false
+    // without them, when the workspace is in 4 KB pages, a few % slower.
+    bool workspaceHugePagesAdvised() const;
 
     const DecoderParams& params() const;
     // Superpixel label per pixel of the last decode (CV_32SC1 view into the

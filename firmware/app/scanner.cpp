@@ -122,9 +122,10 @@ Result<std::unique_ptr<Scanner>> Scanner::create(const BoardConfig& board, Devic
     s.watchdog_ = std::make_unique<LedWatchdog>(*s.devices_.light, std::chrono::milliseconds(board.light.maxOnMs));
 
     logInfo("stria: board '%s' ready: camera %s %dx%d, exposure %.0f us, gain %.2f, settle %d ms; decoder workspace "
-            "%.1f MB; results in %s",
+            "%.1f MB%s; results in %s",
             board.name.c_str(), camera.backendName(), config.width, config.height, config.exposureUs,
             config.analogueGain, board.settleMs, static_cast<double>(s.decoder_->workspaceBytes()) / 1e6,
+            s.decoder_->workspaceHugePagesAdvised() ? " (huge pages)" : " (4 KB pages: no transparent huge pages)",
             s.options_.writeOutputs ? s.options_.outDir.c_str() : "(not saved)");
     return scanner;
 }

@@ -146,8 +146,9 @@ int run(std::span<const std::string> argv)
         std::printf("superpixels %d, graph edges %d, decoded regions %d, points %zu%s\n", result->superpixels,
                     result->graphEdges, result->decodedRegions, result->points.size(),
                     result->truncated ? ", truncated" : "");
-        std::printf("workspace %zu bytes (%.1f bytes/pixel for %dx%d)\n", bytes,
-                    static_cast<double>(bytes) / (static_cast<double>(frame.cols) * frame.rows), frame.cols, frame.rows);
+        std::printf("workspace %zu bytes (%.1f bytes/pixel for %dx%d, %s)\n", bytes,
+                    static_cast<double>(bytes) / (static_cast<double>(frame.cols) * frame.rows), frame.cols, frame.rows,
+                    graph->workspaceHugePagesAdvised() ? "huge pages" : "4 KB pages");
         auto stage = [&](const char* name, double pipeline::StageTimings::*member) {
             std::vector<double> v;
             for (const auto& t : timings) v.push_back(t.*member);

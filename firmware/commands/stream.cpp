@@ -155,9 +155,10 @@ int run(std::span<const std::string> argv)
     auto streamer = Streamer::create(*camera, *devices->light, **decoder, config, options);
     if (!streamer) return failure("stream", streamer.message());
     const std::string replayed = replay ? ", " + std::to_string(replay->frameCount()) + " frames replayed" : "";
-    logInfo("stria: board '%s' streaming: camera %s %dx%d%s, %d frame slots; decoder workspace %.1f MB",
+    logInfo("stria: board '%s' streaming: camera %s %dx%d%s, %d frame slots; decoder workspace %.1f MB%s",
             board->name.c_str(), camera->backendName(), config.width, config.height, replayed.c_str(), options.slots,
-            static_cast<double>((*decoder)->workspaceBytes()) / 1e6);
+            static_cast<double>((*decoder)->workspaceBytes()) / 1e6,
+            (*decoder)->workspaceHugePagesAdvised() ? " (huge pages)" : " (4 KB pages: no transparent huge pages)");
 
     const StopSignals signals(**streamer);
     const StreamSummary summary = (*streamer)->run();

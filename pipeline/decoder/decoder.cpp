@@ -263,6 +263,7 @@ void Decoder::fillDepthMap(cv::Mat& depth) const
 }
 
 std::size_t Decoder::workspaceBytes() const { return ws_->allocatedBytes; }
+bool Decoder::workspaceHugePagesAdvised() const { return ws_->arena.hugePagesAdvised(); }
 const DecoderParams& Decoder::params() const { return ws_->params; }
 
 cv::Mat Decoder::labels() const { return cv::Mat(ws_->height, ws_->width, CV_32SC1, ws_->labels.get()); }

@@ -25,7 +25,7 @@ endif()
 if(CMAKE_MATCH_1 LESS 50000)  # the plane fills the frame: ~54700 edge crossings
   message(FATAL_ERROR "only ${CMAKE_MATCH_1} points on the plane")
 endif()
-if(NOT out MATCHES "workspace [0-9]+ bytes \\(([0-9]+)\\.[0-9] bytes/pixel for 780x580\\)" OR CMAKE_MATCH_1 GREATER 31)
+if(NOT out MATCHES "workspace [0-9]+ bytes \\(([0-9]+)\\.[0-9] bytes/pixel for 780x580, (huge|4 KB) pages\\)" OR CMAKE_MATCH_1 GREATER 31)
   message(FATAL_ERROR "no or too large workspace statistics: ${out}")
 endif()
 file(READ ${OUT}/plane.ply header LIMIT 64)
