@@ -63,7 +63,8 @@ namespace {
 // traversal repeats for every symbol it tests. Each lane does the scalar IEEE
 // operation of the per-channel loop it replaces, so the results are the same
 // floats (tests/decoder/test_kernels.cpp compares them with those loops);
-// sums and maxima over the channels stay scalar, in channel order.
+// sums over the channels keep the loops' order (maxima of non-NaN floats
+// are the same in any order).
 using Lanes = float __attribute__((vector_size(16)));
 using LaneMask = std::int32_t __attribute__((vector_size(16)));
 
@@ -77,39 +78,32 @@ float largestOfChannels(Lanes v) { return std::max({v[0], v[1], v[2]}); }
 // minps and maxps (3 instructions fewer than a select by masks).
 Lanes lesserOf(Lanes a, Lanes b) { return a < b ? a : b; }
 Lanes greaterOf(Lanes a, Lanes b) { return a > b ? a : b; }
+// x where mask, else +0: one and, where a select takes three.
+Lanes where(LaneMask mask, Lanes x) { return (Lanes)(mask & (LaneMask)x); }
+Lanes squareRoot(Lanes v)
+{
+#if defined(__SSE2__)
+    return _mm_sqrt_ps(v);
+#elif defined(__aarch64__)
+    return vsqrtq_f32(v);
+#else
+    for (int i = 0; i < 4; ++i) v[i] = std::sqrt(v[i]);
+    return v;
+#endif
+}
 
-// Per symbol code, what symbolError needs of its channels.
+// Per symbol code, what matchError needs of its channels.
 struct SymbolTerms {
     Lanes sign;         // expected sign per channel
     LaneMask constant;  // the channels the symbol keeps constant
-    // Per channel, all ones in the lane of its group: 0 falling, 1 constant, 2 rising.
-    std::array<LaneMask, 3> group;
-    float constantScale;              // 1 / count of the constant channels: 1 or 1/2 (1 if none)
-    float fallingScale, risingScale;  // 1 / count of the group: 1 or 1/2 where both exist
-    // How the common change is estimated: 1 for the way taken, 0 for the
-    // other (multiplying selects without a branch: the symbol of one call
-    // says nothing about the next one's).
-    float viaConstant, viaMidpoint;
 };
 
 constexpr auto kSymbolTerms = [] {
     std::array<SymbolTerms, kSymbolCount> terms{};
     for (int s = 0; s < kSymbolCount; ++s) {
         const std::array<std::int8_t, 3>& sign = kSymbolSigns[s];
-        int count[3] = {0, 0, 0};
-        std::array<LaneMask, 3> group{};
-        for (int c = 0; c < 3; ++c) {
-            ++count[sign[c] + 1];
-            group[c] = LaneMask{sign[c] < 0 ? -1 : 0, sign[c] == 0 ? -1 : 0, sign[c] > 0 ? -1 : 0, 0};
-        }
         terms[s] = {Lanes{static_cast<float>(sign[0]), static_cast<float>(sign[1]), static_cast<float>(sign[2]), 0},
-                    LaneMask{sign[0] == 0 ? -1 : 0, sign[1] == 0 ? -1 : 0, sign[2] == 0 ? -1 : 0, 0},
-                    group,
-                    count[1] == 2 ? 0.5f : 1.0f,
-                    count[0] == 2 ? 0.5f : 1.0f,
-                    count[2] == 2 ? 0.5f : 1.0f,
-                    count[1] > 0 ? 1.0f : 0.0f,
-                    count[1] == 0 && count[0] > 0 && count[2] > 0 ? 1.0f : 0.0f};
+                    LaneMask{sign[0] == 0 ? -1 : 0, sign[1] == 0 ? -1 : 0, sign[2] == 0 ? -1 : 0, 0}};
     }
     return terms;
 }();
@@ -142,8 +136,7 @@ EqualizedChange equalizedChange(const DecoderWorkspace& ws, int from, int to)
 
 float matchError(const std::array<float, 3>& c, SymbolCode symbol, float t)
 {
-    const MatchScales scales(t);
-    return scaledMatchError(lanesOf(c), kSymbolTerms[symbol], scales.on, scales.off);
+    return scaledMatchError(lanesOf(c), kSymbolTerms[symbol], 1 / (1 - t), 1 / t);  // MatchScales(t)'s
 }
 
 float symbolError(const EqualizedChange& change, SymbolCode symbol, float t)
@@ -153,51 +146,155 @@ float symbolError(const EqualizedChange& change, SymbolCode symbol, float t)
 
 namespace {
 
-float symbolError(const std::array<float, 3>& change, float relative, SymbolCode symbol, const MatchScales& scales)
+// symbolError's per-symbol constants, so that a test reads its channels and
+// factors from a table instead of building them by selects (a loop over the
+// channels per group, then scalar sums and maxima of the lanes: ~120
+// instructions per test, ~60 now). The same IEEE operations on the same
+// values, in the same order, as the group sums of the per-channel reference
+// (test_kernels.cpp), as one formula for every symbol:
+//   ((c[p0] + c[p1] * p1Weight) * pScale + (c[q0] + c[q1] * q1Weight) * qScale) * scale
+// where the weights and scales are 1, 0.5 or 0, exactly: a group of one
+// channel is c[p0] + c[p0] * 0 (= c[p0]), one of two c[p0] + c[p1] (the sum
+// in channel order); the constant channels' mean is P * pScale (+ Q * 0), the
+// midpoint of the falling and the rising ones (F * fs + R * rs) * 0.5; the
+// null symbol's mean is (c0 + c1) + c2, divided by 3 afterwards. x + +-0 is x
+// up to the sign of a zero, which the match does not see (c - common then
+// differs in zeros' signs only, and the errors are squared).
+struct alignas(16) SymbolMatch {
+    // Eq. 5-6 per channel from the corrected change x:
+    // (((x ^ flip) & keep) + add) * scale is |x| * off for a constant channel
+    // (keep clears the sign bit, add 0) and (1 - sign * x) * on for a moving
+    // one (flip negates a rising channel's x, add 1: 1 + -x is 1 - x); lane
+    // 3 gives 0 (MatchScales::channel: the scales).
+    LaneMask flip, keep;
+    Lanes add;
+    std::uint8_t p0, p1, q0, q1;
+    float p1Weight, pScale, q1Weight, qScale, scale;
+};
+
+constexpr auto kSymbolMatch = [] {
+    std::array<SymbolMatch, kSymbolCount> match{};
+    for (int s = 0; s < kSymbolCount; ++s) {
+        const std::array<std::int8_t, 3>& sign = kSymbolSigns[s];
+        SymbolMatch& m = match[s];
+        std::array<std::array<std::uint8_t, 3>, 3> members{};  // per group (falling, constant, rising): its channels
+        std::array<int, 3> count{};
+        for (int c = 0; c < 3; ++c) {
+            const int group = sign[c] + 1;
+            members[group][count[group]++] = static_cast<std::uint8_t>(c);
+        }
+        auto flip = [&](int c) { return sign[c] > 0 ? std::numeric_limits<std::int32_t>::min() : 0; };
+        auto keep = [&](int c) { return sign[c] == 0 ? 0x7fffffff : -1; };
+        auto add = [&](int c) { return sign[c] == 0 ? 0.0f : 1.0f; };
+        m.flip = LaneMask{flip(0), flip(1), flip(2), 0};
+        m.keep = LaneMask{keep(0), keep(1), keep(2), 0};
+        m.add = Lanes{add(0), add(1), add(2), 0};
+        // P (or Q) from a group's channels: one (the second the same, weight 0) or two.
+        auto groupSum = [&](int group, std::uint8_t& first, std::uint8_t& second, float& weight) {
+            first = members[group][0];
+            second = count[group] > 1 ? members[group][1] : members[group][0];
+            weight = count[group] > 1 ? 1.0f : 0.0f;
+        };
+        auto groupScale = [&](int group) { return count[group] == 2 ? 0.5f : 1.0f; };
+        if (count[1] == 3) {  // the null symbol: (c0 + c1) + c2, divided by 3 by symbolError
+            m.p0 = 0, m.p1 = 1, m.q0 = m.q1 = 2;
+            m.p1Weight = m.pScale = m.qScale = m.scale = 1.0f;
+        } else if (count[1] > 0) {  // the constant channels' mean
+            groupSum(1, m.p0, m.p1, m.p1Weight);
+            m.pScale = groupScale(1);
+            m.scale = 1.0f;
+        } else if (count[0] > 0 && count[2] > 0) {  // the midpoint of the falling and the rising ones
+            groupSum(0, m.p0, m.p1, m.p1Weight);
+            m.pScale = groupScale(0);
+            groupSum(2, m.q0, m.q1, m.q1Weight);
+            m.qScale = groupScale(2);
+            m.scale = 0.5f;
+        }  // else every channel moves the same way: no common change (all factors 0)
+    }
+    return match;
+}();
+
+using LaneIndex = std::int32_t __attribute__((vector_size(16)));
+
+// a > b ? a : b and a < b ? a : b per lane as maxps and minps: GCC makes the
+// forms above a compare and three logic operations where an operand is a
+// constant.
+[[gnu::always_inline]] inline Lanes maximumOf(Lanes a, Lanes b)
 {
-    const Lanes c = lanesOf(change);
-    const SymbolTerms& terms = kSymbolTerms[symbol];
-    // The common change, estimated from the channels the symbol keeps
-    // constant, else as the midpoint of the rising and the falling ones; a
-    // symbol that moves every channel the same way leaves none to estimate.
-    // The group sums (one lane each) add +0 for the channels outside the
-    // group, which leaves them unchanged; a count of 2 halves exactly, so it
-    // multiplies (a count of 3 is the null symbol, which no stripe edge has).
-    Lanes groups{};
-    for (int ch = 0; ch < 3; ++ch) groups += select(terms.group[ch], lanesOf(c[ch]), Lanes{});
-    const float falling = groups[0], constant = groups[1], rising = groups[2];
-    const float viaMidpoint = 0.5f * (falling * terms.fallingScale + rising * terms.risingScale);
-    const float viaConstant = symbol == kNullSymbol ? constant / 3 : constant * terms.constantScale;
-    // x * 1 + y * 0 is x (up to the sign of a zero, which nothing below tells apart).
-    const float unclamped = viaConstant * terms.viaConstant + viaMidpoint * terms.viaMidpoint;
-    // Held within +-bound: std::clamp(common, -bound, bound) (bound >= 0),
-    // as std::min(kMaxCommonShare, share), std::min(common, bound) and
-    // std::max(.., -bound) in every lane (minps and maxps: GCC compiles the
-    // scalar forms to branches, and whether a common change is clamped is
-    // data).
-    const Lanes bound =
-        relative > 0 ? lesserOf(lanesOf(kMaxAlbedoChange / relative), lanesOf(kMaxCommonShare)) : Lanes{};
-    const Lanes common = greaterOf(-bound, lesserOf(bound, lanesOf(unclamped)));
-    // Without a common change c is matched as it is (subtracting a zero and
-    // dividing by 1 leave it so, up to the sign of zeros, which the match
-    // ignores); else the corrected change is normalised again.
-    const Lanes corrected = c - common;
-    const Lanes norm = lanesOf(largestOfChannels(absolute(corrected)));
-    // A select, not a branch: whether a common change is removed is data.
-    const Lanes divisor = select((common != 0) & (norm > 0), norm, lanesOf(1.0f));
-    return scaledMatchError(corrected / divisor, terms, scales.on, scales.off);
+#if defined(__SSE2__)
+    return _mm_max_ps(a, b);
+#else
+    return greaterOf(a, b);
+#endif
+}
+[[gnu::always_inline]] inline Lanes minimumOf(Lanes a, Lanes b)
+{
+#if defined(__SSE2__)
+    return _mm_min_ps(a, b);
+#else
+    return lesserOf(a, b);
+#endif
+}
+
+// The largest common change symbolError removes, from the change's relative
+// (eq. 4): std::min(kMaxCommonShare, share) where relative > 0, else 0.
+[[gnu::always_inline]] inline Lanes commonBound(Lanes relative)
+{
+    return where(relative > 0, minimumOf(kMaxAlbedoChange / relative, lanesOf(kMaxCommonShare)));
+}
+
+// change: c[0..2] and a fourth float, finite, the lanes of c (lane 3
+// ignored). c is normalised (equalizedChange): its largest |c| is 1, or
+// every channel is 0 (relative 0, bound 0).
+[[gnu::always_inline]] inline float symbolError(const float* change, Lanes c, Lanes bound, SymbolCode symbol,
+                                                const MatchScales& scales)
+{
+    const SymbolMatch& m = kSymbolMatch[symbol];
+    // The common change (see SymbolMatch), held within +-bound:
+    // std::clamp(common, -bound, bound) (bound >= 0) as std::min(bound,
+    // common) and std::max(-bound, ..), in the reference's operand order.
+    float common = ((change[m.p0] + change[m.p1] * m.p1Weight) * m.pScale +
+                    (change[m.q0] + change[m.q1] * m.q1Weight) * m.qScale) *
+                   m.scale;
+    if (symbol == kNullSymbol) [[unlikely]]
+        common /= 3;
+    const Lanes clamped = maximumOf(-bound, minimumOf(bound, lanesOf(common)));
+    // The corrected change normalised again: divided by its largest |x|,
+    // which is at least 0.7 where relative > 0 (a channel of c is +-1,
+    // |common| <= 0.3) and 0 where it is 0 (c and common 0): the reference
+    // divides by 1 if the common change or that maximum is 0, which leaves x
+    // as it is in both cases (c has a channel +-1, so the maximum is 1; x is
+    // +-0), as does the division by max(maximum, 0.5).
+    const Lanes corrected = c - clamped;
+    const Lanes size = absolute(corrected);
+    const Lanes largest = maximumOf(maximumOf(size, __builtin_shuffle(size, LaneIndex{1, 2, 0, 3})),
+                                    __builtin_shuffle(size, LaneIndex{2, 0, 1, 3}));
+    const Lanes x = corrected / maximumOf(largest, lanesOf(0.5f));
+    Lanes scale;
+    std::memcpy(&scale, scales.channel[symbol].data(), sizeof scale);
+    const Lanes e = ((Lanes)(((LaneMask)x ^ m.flip) & m.keep) + m.add) * scale;
+    const Lanes square = e * e;
+    // (square[0] + square[1]) + square[2] in lane 0, and its root.
+    const Lanes sum = square + __builtin_shuffle(square, LaneIndex{1, 1, 1, 1}) + __builtin_shuffle(square, LaneIndex{2, 2, 2, 2});
+    return squareRoot(sum)[0];
 }
 
 }  // namespace
 
 float symbolError(const EqualizedChange& change, SymbolCode symbol, const MatchScales& scales)
 {
-    return symbolError(change.c, change.relative, symbol, scales);
+    static_assert(offsetof(EqualizedChange, c) == 0 && sizeof(EqualizedChange) >= sizeof(Lanes));
+    Lanes c;  // lane 3: weight
+    std::memcpy(&c, change.c.data(), sizeof c);
+    return symbolError(change.c.data(), c, commonBound(lanesOf(change.relative)), symbol, scales);
 }
 
 float symbolError(const EdgeChange& change, SymbolCode symbolFromA, const MatchScales& scales)
 {
-    return symbolError(change.c, change.relative, symbolFromA, scales);
+    static_assert(offsetof(EdgeChange, c) == 0 && offsetof(EdgeChange, commonBound) == 12 && sizeof(EdgeChange) == sizeof(Lanes));
+    Lanes c;  // lane 3: commonBound
+    std::memcpy(&c, change.c.data(), sizeof c);
+    return symbolError(change.c.data(), c, __builtin_shuffle(c, LaneIndex{3, 3, 3, 3}), symbolFromA, scales);
 }
 
 SymbolCode optimalSymbol(const std::array<float, 3>& c, float t)
@@ -221,19 +318,6 @@ constexpr int kBlock = 4;
 Lanes floatsOf(LaneMask v) { return __builtin_convertvector(v, Lanes); }
 // std::max({x, y, z}) per lane: the first of the largest.
 Lanes largestOf(Lanes x, Lanes y, Lanes z) { return greaterOf(z, greaterOf(y, x)); }
-// x where mask, else +0: one and, where a select takes three.
-Lanes where(LaneMask mask, Lanes x) { return (Lanes)(mask & (LaneMask)x); }
-Lanes squareRoot(Lanes v)
-{
-#if defined(__SSE2__)
-    return _mm_sqrt_ps(v);
-#elif defined(__aarch64__)
-    return vsqrtq_f32(v);
-#else
-    for (int i = 0; i < kBlock; ++i) v[i] = std::sqrt(v[i]);
-    return v;
-#endif
-}
 
 struct SymbolLanes {
     Lanes weight;       // eq. 3
@@ -241,7 +325,7 @@ struct SymbolLanes {
     Lanes bestMatch;    // its symbolError
     Lanes rawChange[3]; // |to - from| per channel (eq. 1)
     Lanes change[3];    // equalizedChange's c
-    Lanes relative;     // and its relative
+    Lanes commonBound;  // and the bound of its common change (EdgeChange)
 };
 
 // Eq. 3-7 from colour from to colour to (R G B lanes).
@@ -259,7 +343,6 @@ struct SymbolLanes {
     const Lanes relative = largestOf(absolute(c[0]), absolute(c[1]), absolute(c[2]));
     for (Lanes& v : c) v = select(relative > 0, v / relative, v);
     for (int ch = 0; ch < 3; ++ch) out.change[ch] = c[ch];
-    out.relative = relative;
     // The optimal symbol's signs, (c >= t) - (c <= -t), and the channels
     // falling, constant and rising from those masks (-1 where true).
     LaneMask sign[3], count[3] = {};  // count: falling, constant, rising
@@ -274,7 +357,7 @@ struct SymbolLanes {
         }
     }
     out.symbol = kNullSymbol + 9 * sign[0] + 3 * sign[1] + sign[2];  // makeSymbol
-    // symbolError of that symbol: its terms (kSymbolTerms) from the counts.
+    // symbolError of that symbol: its common change from the counts.
     auto scaleOf = [](LaneMask n) { return 1.0f - where(n == 2, lanesOf(0.5f)); };  // exact: 1 or 0.5
     auto flag = [](LaneMask m) { return where(m, lanesOf(1.0f)); };
     const Lanes viaMidpoint = 0.5f * (group[0] * scaleOf(count[0]) + group[2] * scaleOf(count[2]));
@@ -282,7 +365,8 @@ struct SymbolLanes {
     Lanes common = viaConstant * flag(count[1] > 0) + viaMidpoint * flag((count[1] == 0) & (count[0] > 0) & (count[2] > 0));
     // std::min(kMaxCommonShare, share) where relative > 0, then the clamp,
     // in symbolError's operand order.
-    const Lanes bound = where(relative > 0, lesserOf(kMaxAlbedoChange / relative, lanesOf(kMaxCommonShare)));
+    const Lanes bound = commonBound(relative);
+    out.commonBound = bound;
     common = greaterOf(-bound, lesserOf(bound, common));
     Lanes corrected[3];
     for (int ch = 0; ch < 3; ++ch) corrected[ch] = c[ch] - common;
@@ -369,7 +453,7 @@ STRIA_X86_CLONES void computeEdgeFeatures(DecoderWorkspace& ws)
                             symbols.weight, (Lanes)(across & (LaneMask)symbols.bestMatch),
                             (Lanes)(across & (LaneMask)gradientError)};
         transpose4(feature);
-        Lanes equalized[4] = {symbols.change[0], symbols.change[1], symbols.change[2], symbols.relative};
+        Lanes equalized[4] = {symbols.change[0], symbols.change[1], symbols.change[2], symbols.commonBound};
         transpose4(equalized);
         Lanes change[4] = {symbols.rawChange[0], symbols.rawChange[1], symbols.rawChange[2],
                            lanesOf(-std::numeric_limits<float>::infinity())};
