@@ -118,7 +118,15 @@ float scaledMatchError(Lanes c, const SymbolTerms& terms, float onScale, float o
 
 }  // namespace
 
-EqualizedChange equalizedChange(const DecoderWorkspace& ws, int from, int to)
+namespace {
+
+// Eq. 4 in lanes: c (lane 3 finite and meaningless), its weight and relative.
+struct ChangeLanes {
+    Lanes c;
+    float weight, relative;
+};
+
+[[gnu::always_inline]] inline ChangeLanes equalizedLanes(const DecoderWorkspace& ws, int from, int to)
 {
     // The colours by 16-byte loads: the fourth lane is range[0], finite,
     // computed on and ignored.
@@ -131,7 +139,32 @@ EqualizedChange equalizedChange(const DecoderWorkspace& ws, int from, int to)
     Lanes c = raw / select(half < kMinBrightness, lanesOf(kMinBrightness), half);
     const float norm = largestOfChannels(absolute(c));
     if (norm > 0) c /= norm;
-    return {{c[0], c[1], c[2]}, largestOfChannels(absolute(raw)), norm};
+    return {c, largestOfChannels(absolute(raw)), norm};
+}
+
+}  // namespace
+
+EqualizedChange equalizedChange(const DecoderWorkspace& ws, int from, int to)
+{
+    const ChangeLanes change = equalizedLanes(ws, from, to);
+    return {{change.c[0], change.c[1], change.c[2]}, change.weight, change.relative};
+}
+
+ExpectedSymbolMatch expectedSymbolMatch(const DecoderWorkspace& ws, int from, int to, SymbolCode symbol, float t,
+                                        const MatchScales& scales)
+{
+    const ChangeLanes change = equalizedLanes(ws, from, to);
+    const SymbolTerms& terms = kSymbolTerms[symbol];
+    // optimalSymbol's signs, (c >= t) - (c <= -t), against the symbol's.
+    const LaneMask sign = (change.c <= -t) - (change.c >= t);
+    const LaneMask same = __builtin_convertvector(sign, Lanes) == terms.sign;
+#if defined(__SSE2__)
+    const bool fits = (_mm_movemask_ps((__m128)same) & 7) == 7;
+#else
+    const bool fits = (same[0] & same[1] & same[2]) != 0;
+#endif
+    // matchError's arithmetic, its scales those of MatchScales.
+    return {fits, fits ? scaledMatchError(change.c, terms, scales.on, scales.off) : 0.0f, change.weight};
 }
 
 float matchError(const std::array<float, 3>& c, SymbolCode symbol, float t)

@@ -458,14 +458,13 @@ private:
         Hypothesis none;
         const Region& ref = ws_.regions[f.reference];
         const SymbolCode expected = stripeSymbol(pattern, ref.stripe, f.stripe);
-        const EqualizedChange change = equalizedChange(ws_, f.reference, to);
-        if (optimalSymbol(change.c, t_) != expected) return none;
+        const ExpectedSymbolMatch match = expectedSymbolMatch(ws_, f.reference, to, expected, t_, scales_);
+        if (!match.fits) return none;
         const GraphEdge& border = ws_.edges[e];
         const float meanGradient = (border.primaryGradient + border.secondaryGradient) / std::max(border.borderCount, 1);
-        const float error =
-            matchError(change.c, expected, t_) + kNullBorderWeight * meanGradient / std::max(referenceWeight, 1.0f);
+        const float error = match.error + kNullBorderWeight * meanGradient / std::max(referenceWeight, 1.0f);
         if (!(error < 1e30f)) return none;  // as a first candidate's error it had to beat 1e30
-        return {error, beta_ * error / std::max(change.weight, 1.0f), f.stripe, f.reference};
+        return {error, beta_ * error / std::max(match.weight, 1.0f), f.stripe, f.reference};
     }
 
     void pushNeighbours(int from)

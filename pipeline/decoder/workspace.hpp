@@ -247,6 +247,16 @@ struct MatchScales {
     alignas(16) std::array<std::array<float, 4>, kSymbolCount> channel{};
 };
 float symbolError(const EqualizedChange& change, SymbolCode symbol, const MatchScales& scales);
+// The traversal's null-edge test in one pass: for c = equalizedChange(ws,
+// from, to).c, whether optimalSymbol(c, t) is `symbol`, and if so
+// matchError(c, symbol, t) (scales = MatchScales(t)); and the change's weight.
+struct ExpectedSymbolMatch {
+    bool fits = false;
+    float error = 0;
+    float weight = 0;
+};
+ExpectedSymbolMatch expectedSymbolMatch(const DecoderWorkspace& ws, int from, int to, SymbolCode symbol, float t,
+                                        const MatchScales& scales);
 // An edge's equalised change from a to b (DecoderWorkspace::edgeChanges),
 // and the largest common change symbolError removes from it:
 // std::min(0.3f, 0.15f / relative), 0 where relative is 0 (edges.cpp; the
