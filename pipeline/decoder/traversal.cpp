@@ -19,6 +19,7 @@
 // stripe edges around them (the window property, locally; a black stripe,
 // which a shadow imitates, needs one on each side), and components
 // (regions decoded by one pass) with fewer than minComponentRegions regions.
+#include "pipeline/decoder/symbol_error.hpp"
 #include "pipeline/decoder/workspace.hpp"
 
 #include <algorithm>

@@ -266,11 +266,6 @@ struct EdgeChange {
     std::array<float, 3> c{};
     float commonBound = 0;
 };
-// symbolError(equalizedChange(ws, from, to), symbol, scales) for the edge
-// whose change from a to b is `change`, given symbolFromA = symbol if from
-// is a, else reversedSymbol(symbol): the same float (from b the change is
-// the negated one, up to the sign of zeros, which symbolError does not see,
-// and the reversed symbol's arithmetic on it is negated step for step).
-float symbolError(const EdgeChange& change, SymbolCode symbolFromA, const MatchScales& scales);
+// symbolError of an EdgeChange: symbol_error.hpp (inline, for the traversal).
 
 }  // namespace stria::pipeline

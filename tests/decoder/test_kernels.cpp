@@ -10,6 +10,7 @@
 // against scalar references and pairGradient.
 #include "hal/sim/scene/scene.hpp"
 #include "pipeline/decoder/simd.hpp"
+#include "pipeline/decoder/symbol_error.hpp"
 #include "pipeline/decoder/workspace.hpp"
 
 #include <gtest/gtest.h>
