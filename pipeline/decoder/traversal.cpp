@@ -659,7 +659,8 @@ private:
         std::int32_t* both = ws_.edgeOrder.get();
         std::int32_t* rest = both + ws_.maxEdges - 1;  // rest[-i]
         int bothCount = 0, restCount = 0;
-        for (int e = 0; e < ws_.edgeCount; ++e) {
+        const int edgeCount = ws_.edgeCount;  // (not reloaded after each store to the lists)
+        for (int e = 0; e < edgeCount; ++e) {
             const GraphEdge& edge = ws_.edges[e];
             const int sa = stripes_[edge.a], sb = stripes_[edge.b];
             const bool parallel = features_[e].direction() == EdgeDirection::Parallel;
