@@ -176,8 +176,11 @@ private:
     // change (seen from a, so the symbol reversed when walking from b).
     float symbolMatch(const EdgeFeature& edge, int from, int to, SymbolCode symbol) const
     {
-        if (bestSymbolFrom(edge, from, to) == symbol) return edge.bestMatch;
-        return symbolError(ws_.edgeChanges[&edge - features_], from < to ? symbol : reversedSymbol(symbol), scales_);
+        // (The symbol seen from a against the optimal one, which is stored
+        // as seen from a: bestSymbolFrom's comparison, one reversal fewer.)
+        const SymbolCode symbolFromA = from < to ? symbol : reversedSymbol(symbol);
+        if (edge.bestSymbol() == symbolFromA) return edge.bestMatch;
+        return symbolError(ws_.edgeChanges[&edge - features_], symbolFromA, scales_);
     }
 
     // Eq. 9 for `symbol` on `edge` walked from `from` to `to`, and eq. 10
