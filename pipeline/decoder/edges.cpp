@@ -19,6 +19,7 @@
 // of the two regions is symmetric, so an edge gets the same symbol (reversed)
 // from either side.
 #include "pipeline/decoder/simd.hpp"
+#include "pipeline/decoder/symbol_error.hpp"
 #include "pipeline/decoder/workspace.hpp"
 
 #include <algorithm>
@@ -63,7 +64,8 @@ namespace {
 // traversal repeats for every symbol it tests. Each lane does the scalar IEEE
 // operation of the per-channel loop it replaces, so the results are the same
 // floats (tests/decoder/test_kernels.cpp compares them with those loops);
-// sums and maxima over the channels stay scalar, in channel order.
+// sums over the channels keep the loops' order (maxima of non-NaN floats
+// are the same in any order).
 using Lanes = float __attribute__((vector_size(16)));
 using LaneMask = std::int32_t __attribute__((vector_size(16)));
 
@@ -77,39 +79,34 @@ float largestOfChannels(Lanes v) { return std::max({v[0], v[1], v[2]}); }
 // minps and maxps (3 instructions fewer than a select by masks).
 Lanes lesserOf(Lanes a, Lanes b) { return a < b ? a : b; }
 Lanes greaterOf(Lanes a, Lanes b) { return a > b ? a : b; }
+using symbol_error::maximumOf;
+using symbol_error::minimumOf;
+// x where mask, else +0: one and, where a select takes three.
+Lanes where(LaneMask mask, Lanes x) { return (Lanes)(mask & (LaneMask)x); }
+Lanes squareRoot(Lanes v)
+{
+#if defined(__SSE2__)
+    return _mm_sqrt_ps(v);
+#elif defined(__aarch64__)
+    return vsqrtq_f32(v);
+#else
+    for (int i = 0; i < 4; ++i) v[i] = std::sqrt(v[i]);
+    return v;
+#endif
+}
 
-// Per symbol code, what symbolError needs of its channels.
+// Per symbol code, what matchError needs of its channels.
 struct SymbolTerms {
     Lanes sign;         // expected sign per channel
     LaneMask constant;  // the channels the symbol keeps constant
-    // Per channel, all ones in the lane of its group: 0 falling, 1 constant, 2 rising.
-    std::array<LaneMask, 3> group;
-    float constantScale;              // 1 / count of the constant channels: 1 or 1/2 (1 if none)
-    float fallingScale, risingScale;  // 1 / count of the group: 1 or 1/2 where both exist
-    // How the common change is estimated: 1 for the way taken, 0 for the
-    // other (multiplying selects without a branch: the symbol of one call
-    // says nothing about the next one's).
-    float viaConstant, viaMidpoint;
 };
 
 constexpr auto kSymbolTerms = [] {
     std::array<SymbolTerms, kSymbolCount> terms{};
     for (int s = 0; s < kSymbolCount; ++s) {
         const std::array<std::int8_t, 3>& sign = kSymbolSigns[s];
-        int count[3] = {0, 0, 0};
-        std::array<LaneMask, 3> group{};
-        for (int c = 0; c < 3; ++c) {
-            ++count[sign[c] + 1];
-            group[c] = LaneMask{sign[c] < 0 ? -1 : 0, sign[c] == 0 ? -1 : 0, sign[c] > 0 ? -1 : 0, 0};
-        }
         terms[s] = {Lanes{static_cast<float>(sign[0]), static_cast<float>(sign[1]), static_cast<float>(sign[2]), 0},
-                    LaneMask{sign[0] == 0 ? -1 : 0, sign[1] == 0 ? -1 : 0, sign[2] == 0 ? -1 : 0, 0},
-                    group,
-                    count[1] == 2 ? 0.5f : 1.0f,
-                    count[0] == 2 ? 0.5f : 1.0f,
-                    count[2] == 2 ? 0.5f : 1.0f,
-                    count[1] > 0 ? 1.0f : 0.0f,
-                    count[1] == 0 && count[0] > 0 && count[2] > 0 ? 1.0f : 0.0f};
+                    LaneMask{sign[0] == 0 ? -1 : 0, sign[1] == 0 ? -1 : 0, sign[2] == 0 ? -1 : 0, 0}};
     }
     return terms;
 }();
@@ -124,7 +121,15 @@ float scaledMatchError(Lanes c, const SymbolTerms& terms, float onScale, float o
 
 }  // namespace
 
-EqualizedChange equalizedChange(const DecoderWorkspace& ws, int from, int to)
+namespace {
+
+// Eq. 4 in lanes: c (lane 3 finite and meaningless), its weight and relative.
+struct ChangeLanes {
+    Lanes c;
+    float weight, relative;
+};
+
+[[gnu::always_inline]] inline ChangeLanes equalizedLanes(const DecoderWorkspace& ws, int from, int to)
 {
     // The colours by 16-byte loads: the fourth lane is range[0], finite,
     // computed on and ignored.
@@ -137,13 +142,37 @@ EqualizedChange equalizedChange(const DecoderWorkspace& ws, int from, int to)
     Lanes c = raw / select(half < kMinBrightness, lanesOf(kMinBrightness), half);
     const float norm = largestOfChannels(absolute(c));
     if (norm > 0) c /= norm;
-    return {{c[0], c[1], c[2]}, largestOfChannels(absolute(raw)), norm};
+    return {c, largestOfChannels(absolute(raw)), norm};
+}
+
+}  // namespace
+
+EqualizedChange equalizedChange(const DecoderWorkspace& ws, int from, int to)
+{
+    const ChangeLanes change = equalizedLanes(ws, from, to);
+    return {{change.c[0], change.c[1], change.c[2]}, change.weight, change.relative};
+}
+
+ExpectedSymbolMatch expectedSymbolMatch(const DecoderWorkspace& ws, int from, int to, SymbolCode symbol, float t,
+                                        const MatchScales& scales)
+{
+    const ChangeLanes change = equalizedLanes(ws, from, to);
+    const SymbolTerms& terms = kSymbolTerms[symbol];
+    // optimalSymbol's signs, (c >= t) - (c <= -t), against the symbol's.
+    const LaneMask sign = (change.c <= -t) - (change.c >= t);
+    const LaneMask same = __builtin_convertvector(sign, Lanes) == terms.sign;
+#if defined(__SSE2__)
+    const bool fits = (_mm_movemask_ps((__m128)same) & 7) == 7;
+#else
+    const bool fits = (same[0] & same[1] & same[2]) != 0;
+#endif
+    // matchError's arithmetic, its scales those of MatchScales.
+    return {fits, fits ? scaledMatchError(change.c, terms, scales.on, scales.off) : 0.0f, change.weight};
 }
 
 float matchError(const std::array<float, 3>& c, SymbolCode symbol, float t)
 {
-    const MatchScales scales(t);
-    return scaledMatchError(lanesOf(c), kSymbolTerms[symbol], scales.on, scales.off);
+    return scaledMatchError(lanesOf(c), kSymbolTerms[symbol], 1 / (1 - t), 1 / t);  // MatchScales(t)'s
 }
 
 float symbolError(const EqualizedChange& change, SymbolCode symbol, float t)
@@ -153,51 +182,21 @@ float symbolError(const EqualizedChange& change, SymbolCode symbol, float t)
 
 namespace {
 
-float symbolError(const std::array<float, 3>& change, float relative, SymbolCode symbol, const MatchScales& scales)
+// The largest common change symbolError removes, from the change's relative
+// (eq. 4): std::min(kMaxCommonShare, share) where relative > 0, else 0.
+[[gnu::always_inline]] inline Lanes commonBound(Lanes relative)
 {
-    const Lanes c = lanesOf(change);
-    const SymbolTerms& terms = kSymbolTerms[symbol];
-    // The common change, estimated from the channels the symbol keeps
-    // constant, else as the midpoint of the rising and the falling ones; a
-    // symbol that moves every channel the same way leaves none to estimate.
-    // The group sums (one lane each) add +0 for the channels outside the
-    // group, which leaves them unchanged; a count of 2 halves exactly, so it
-    // multiplies (a count of 3 is the null symbol, which no stripe edge has).
-    Lanes groups{};
-    for (int ch = 0; ch < 3; ++ch) groups += select(terms.group[ch], lanesOf(c[ch]), Lanes{});
-    const float falling = groups[0], constant = groups[1], rising = groups[2];
-    const float viaMidpoint = 0.5f * (falling * terms.fallingScale + rising * terms.risingScale);
-    const float viaConstant = symbol == kNullSymbol ? constant / 3 : constant * terms.constantScale;
-    // x * 1 + y * 0 is x (up to the sign of a zero, which nothing below tells apart).
-    const float unclamped = viaConstant * terms.viaConstant + viaMidpoint * terms.viaMidpoint;
-    // Held within +-bound: std::clamp(common, -bound, bound) (bound >= 0),
-    // as std::min(kMaxCommonShare, share), std::min(common, bound) and
-    // std::max(.., -bound) in every lane (minps and maxps: GCC compiles the
-    // scalar forms to branches, and whether a common change is clamped is
-    // data).
-    const Lanes bound =
-        relative > 0 ? lesserOf(lanesOf(kMaxAlbedoChange / relative), lanesOf(kMaxCommonShare)) : Lanes{};
-    const Lanes common = greaterOf(-bound, lesserOf(bound, lanesOf(unclamped)));
-    // Without a common change c is matched as it is (subtracting a zero and
-    // dividing by 1 leave it so, up to the sign of zeros, which the match
-    // ignores); else the corrected change is normalised again.
-    const Lanes corrected = c - common;
-    const Lanes norm = lanesOf(largestOfChannels(absolute(corrected)));
-    // A select, not a branch: whether a common change is removed is data.
-    const Lanes divisor = select((common != 0) & (norm > 0), norm, lanesOf(1.0f));
-    return scaledMatchError(corrected / divisor, terms, scales.on, scales.off);
+    return where(relative > 0, minimumOf(kMaxAlbedoChange / relative, lanesOf(kMaxCommonShare)));
 }
 
 }  // namespace
 
 float symbolError(const EqualizedChange& change, SymbolCode symbol, const MatchScales& scales)
 {
-    return symbolError(change.c, change.relative, symbol, scales);
-}
-
-float symbolError(const EdgeChange& change, SymbolCode symbolFromA, const MatchScales& scales)
-{
-    return symbolError(change.c, change.relative, symbolFromA, scales);
+    static_assert(offsetof(EqualizedChange, c) == 0 && sizeof(EqualizedChange) >= sizeof(Lanes));
+    Lanes c;  // lane 3: weight
+    std::memcpy(&c, change.c.data(), sizeof c);
+    return symbol_error::symbolErrorLanes(change.c.data(), c, commonBound(lanesOf(change.relative)), symbol, scales);
 }
 
 SymbolCode optimalSymbol(const std::array<float, 3>& c, float t)
@@ -221,19 +220,6 @@ constexpr int kBlock = 4;
 Lanes floatsOf(LaneMask v) { return __builtin_convertvector(v, Lanes); }
 // std::max({x, y, z}) per lane: the first of the largest.
 Lanes largestOf(Lanes x, Lanes y, Lanes z) { return greaterOf(z, greaterOf(y, x)); }
-// x where mask, else +0: one and, where a select takes three.
-Lanes where(LaneMask mask, Lanes x) { return (Lanes)(mask & (LaneMask)x); }
-Lanes squareRoot(Lanes v)
-{
-#if defined(__SSE2__)
-    return _mm_sqrt_ps(v);
-#elif defined(__aarch64__)
-    return vsqrtq_f32(v);
-#else
-    for (int i = 0; i < kBlock; ++i) v[i] = std::sqrt(v[i]);
-    return v;
-#endif
-}
 
 struct SymbolLanes {
     Lanes weight;       // eq. 3
@@ -241,7 +227,7 @@ struct SymbolLanes {
     Lanes bestMatch;    // its symbolError
     Lanes rawChange[3]; // |to - from| per channel (eq. 1)
     Lanes change[3];    // equalizedChange's c
-    Lanes relative;     // and its relative
+    Lanes commonBound;  // and the bound of its common change (EdgeChange)
 };
 
 // Eq. 3-7 from colour from to colour to (R G B lanes).
@@ -259,7 +245,6 @@ struct SymbolLanes {
     const Lanes relative = largestOf(absolute(c[0]), absolute(c[1]), absolute(c[2]));
     for (Lanes& v : c) v = select(relative > 0, v / relative, v);
     for (int ch = 0; ch < 3; ++ch) out.change[ch] = c[ch];
-    out.relative = relative;
     // The optimal symbol's signs, (c >= t) - (c <= -t), and the channels
     // falling, constant and rising from those masks (-1 where true).
     LaneMask sign[3], count[3] = {};  // count: falling, constant, rising
@@ -274,7 +259,7 @@ struct SymbolLanes {
         }
     }
     out.symbol = kNullSymbol + 9 * sign[0] + 3 * sign[1] + sign[2];  // makeSymbol
-    // symbolError of that symbol: its terms (kSymbolTerms) from the counts.
+    // symbolError of that symbol: its common change from the counts.
     auto scaleOf = [](LaneMask n) { return 1.0f - where(n == 2, lanesOf(0.5f)); };  // exact: 1 or 0.5
     auto flag = [](LaneMask m) { return where(m, lanesOf(1.0f)); };
     const Lanes viaMidpoint = 0.5f * (group[0] * scaleOf(count[0]) + group[2] * scaleOf(count[2]));
@@ -282,7 +267,8 @@ struct SymbolLanes {
     Lanes common = viaConstant * flag(count[1] > 0) + viaMidpoint * flag((count[1] == 0) & (count[0] > 0) & (count[2] > 0));
     // std::min(kMaxCommonShare, share) where relative > 0, then the clamp,
     // in symbolError's operand order.
-    const Lanes bound = where(relative > 0, lesserOf(kMaxAlbedoChange / relative, lanesOf(kMaxCommonShare)));
+    const Lanes bound = commonBound(relative);
+    out.commonBound = bound;
     common = greaterOf(-bound, lesserOf(bound, common));
     Lanes corrected[3];
     for (int ch = 0; ch < 3; ++ch) corrected[ch] = c[ch] - common;
@@ -369,7 +355,7 @@ STRIA_X86_CLONES void computeEdgeFeatures(DecoderWorkspace& ws)
                             symbols.weight, (Lanes)(across & (LaneMask)symbols.bestMatch),
                             (Lanes)(across & (LaneMask)gradientError)};
         transpose4(feature);
-        Lanes equalized[4] = {symbols.change[0], symbols.change[1], symbols.change[2], symbols.relative};
+        Lanes equalized[4] = {symbols.change[0], symbols.change[1], symbols.change[2], symbols.commonBound};
         transpose4(equalized);
         Lanes change[4] = {symbols.rawChange[0], symbols.rawChange[1], symbols.rawChange[2],
                            lanesOf(-std::numeric_limits<float>::infinity())};

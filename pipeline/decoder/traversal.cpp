@@ -19,6 +19,7 @@
 // stripe edges around them (the window property, locally; a black stripe,
 // which a shadow imitates, needs one on each side), and components
 // (regions decoded by one pass) with fewer than minComponentRegions regions.
+#include "pipeline/decoder/symbol_error.hpp"
 #include "pipeline/decoder/workspace.hpp"
 
 #include <algorithm>
@@ -175,8 +176,11 @@ private:
     // change (seen from a, so the symbol reversed when walking from b).
     float symbolMatch(const EdgeFeature& edge, int from, int to, SymbolCode symbol) const
     {
-        if (bestSymbolFrom(edge, from, to) == symbol) return edge.bestMatch;
-        return symbolError(ws_.edgeChanges[&edge - features_], from < to ? symbol : reversedSymbol(symbol), scales_);
+        // (The symbol seen from a against the optimal one, which is stored
+        // as seen from a: bestSymbolFrom's comparison, one reversal fewer.)
+        const SymbolCode symbolFromA = from < to ? symbol : reversedSymbol(symbol);
+        if (edge.bestSymbol() == symbolFromA) return edge.bestMatch;
+        return symbolError(ws_.edgeChanges[&edge - features_], symbolFromA, scales_);
     }
 
     // Eq. 9 for `symbol` on `edge` walked from `from` to `to`, and eq. 10
@@ -458,14 +462,13 @@ private:
         Hypothesis none;
         const Region& ref = ws_.regions[f.reference];
         const SymbolCode expected = stripeSymbol(pattern, ref.stripe, f.stripe);
-        const EqualizedChange change = equalizedChange(ws_, f.reference, to);
-        if (optimalSymbol(change.c, t_) != expected) return none;
+        const ExpectedSymbolMatch match = expectedSymbolMatch(ws_, f.reference, to, expected, t_, scales_);
+        if (!match.fits) return none;
         const GraphEdge& border = ws_.edges[e];
         const float meanGradient = (border.primaryGradient + border.secondaryGradient) / std::max(border.borderCount, 1);
-        const float error =
-            matchError(change.c, expected, t_) + kNullBorderWeight * meanGradient / std::max(referenceWeight, 1.0f);
+        const float error = match.error + kNullBorderWeight * meanGradient / std::max(referenceWeight, 1.0f);
         if (!(error < 1e30f)) return none;  // as a first candidate's error it had to beat 1e30
-        return {error, beta_ * error / std::max(change.weight, 1.0f), f.stripe, f.reference};
+        return {error, beta_ * error / std::max(match.weight, 1.0f), f.stripe, f.reference};
     }
 
     void pushNeighbours(int from)
@@ -659,7 +662,8 @@ private:
         std::int32_t* both = ws_.edgeOrder.get();
         std::int32_t* rest = both + ws_.maxEdges - 1;  // rest[-i]
         int bothCount = 0, restCount = 0;
-        for (int e = 0; e < ws_.edgeCount; ++e) {
+        const int edgeCount = ws_.edgeCount;  // (not reloaded after each store to the lists)
+        for (int e = 0; e < edgeCount; ++e) {
             const GraphEdge& edge = ws_.edges[e];
             const int sa = stripes_[edge.a], sb = stripes_[edge.b];
             const bool parallel = features_[e].direction() == EdgeDirection::Parallel;

@@ -247,20 +247,36 @@ float symbolError(const EqualizedChange& change, SymbolCode symbol, float t);
 // The same with eq. 5-6's scales 1 / (1 - t) and 1 / t computed once by a
 // stage that tests many symbols (two divisions fewer per test).
 struct MatchScales {
-    explicit MatchScales(float t) : on(1 / (1 - t)), off(1 / t) {}
+    explicit MatchScales(float t) : on(1 / (1 - t)), off(1 / t)
+    {
+        for (int s = 0; s < kSymbolCount; ++s)
+            for (int c = 0; c < 3; ++c) channel[s][c] = kSymbolSigns[s][c] == 0 ? off : on;
+    }
     float on, off;
+    // Per symbol code, each channel's scale: off where the symbol keeps the
+    // channel constant, else on (the fourth: 0).
+    alignas(16) std::array<std::array<float, 4>, kSymbolCount> channel{};
 };
 float symbolError(const EqualizedChange& change, SymbolCode symbol, const MatchScales& scales);
-// An edge's equalised change from a to b (DecoderWorkspace::edgeChanges).
+// The traversal's null-edge test in one pass: for c = equalizedChange(ws,
+// from, to).c, whether optimalSymbol(c, t) is `symbol`, and if so
+// matchError(c, symbol, t) (scales = MatchScales(t)); and the change's weight.
+struct ExpectedSymbolMatch {
+    bool fits = false;
+    float error = 0;
+    float weight = 0;
+};
+ExpectedSymbolMatch expectedSymbolMatch(const DecoderWorkspace& ws, int from, int to, SymbolCode symbol, float t,
+                                        const MatchScales& scales);
+// An edge's equalised change from a to b (DecoderWorkspace::edgeChanges),
+// and the largest common change symbolError removes from it:
+// std::min(0.3f, 0.15f / relative), 0 where relative is 0 (edges.cpp; the
+// same from either end), which the traversal's tests of other symbols need
+// and the edge stage has at hand.
 struct EdgeChange {
     std::array<float, 3> c{};
-    float relative = 0;
+    float commonBound = 0;
 };
-// symbolError(equalizedChange(ws, from, to), symbol, scales) for the edge
-// whose change from a to b is `change`, given symbolFromA = symbol if from
-// is a, else reversedSymbol(symbol): the same float (from b the change is
-// the negated one, up to the sign of zeros, which symbolError does not see,
-// and the reversed symbol's arithmetic on it is negated step for step).
-float symbolError(const EdgeChange& change, SymbolCode symbolFromA, const MatchScales& scales);
+// symbolError of an EdgeChange: symbol_error.hpp (inline, for the traversal).
 
 }  // namespace stria::pipeline

@@ -10,6 +10,7 @@
 // against scalar references and pairGradient.
 #include "hal/sim/scene/scene.hpp"
 #include "pipeline/decoder/simd.hpp"
+#include "pipeline/decoder/symbol_error.hpp"
 #include "pipeline/decoder/workspace.hpp"
 
 #include <gtest/gtest.h>
@@ -783,7 +784,8 @@ TEST(DecoderKernels, EdgeSymbolErrorsMatchThePerChannelLoopsBitwise)
     std::uniform_real_distribution<float> colour(-10.0f, 270.0f);
     std::uniform_int_distribution<int> digit(0, 3);
     const float t = static_cast<float>(ws.params.t);
-    int changes = 0, differing = 0, corrected = 0;
+    const MatchScales scales(t);
+    int changes = 0, differing = 0, corrected = 0, fitting = 0;
     for (int i = 0; i < 20000; ++i) {
         for (int r = 0; r < 2; ++r)
             for (float& c : ws.regions[r].color) c = i % 3 == 0 ? static_cast<float>(64 * digit(random)) : colour(random);
@@ -798,12 +800,22 @@ TEST(DecoderKernels, EdgeSymbolErrorsMatchThePerChannelLoopsBitwise)
             differing += std::bit_cast<std::uint32_t>(matchError(reference.c, symbol, t)) !=
                          std::bit_cast<std::uint32_t>(referenceMatchError(reference.c, symbol, t));
             corrected += error != matchError(reference.c, symbol, t);
+            // The traversal's null-edge test in one pass: optimalSymbol and matchError.
+            const ExpectedSymbolMatch match = expectedSymbolMatch(ws, 0, 1, symbol, t, scales);
+            const bool fits = optimalSymbol(reference.c, t) == symbol;
+            differing += match.fits != fits ||
+                         std::bit_cast<std::uint32_t>(match.weight) != std::bit_cast<std::uint32_t>(reference.weight) ||
+                         (fits && std::bit_cast<std::uint32_t>(match.error) !=
+                                      std::bit_cast<std::uint32_t>(referenceMatchError(reference.c, symbol, t)));
+            fitting += fits;
         }
         ++changes;
     }
     EXPECT_EQ(differing, 0) << "of " << changes << " changes";
     // The common change's correction is exercised, not bypassed.
     EXPECT_GT(corrected, changes);
+    // Every change fits one symbol, its optimal one.
+    EXPECT_EQ(fitting, changes);
 }
 
 // The edge stage (edges.cpp: 4 edges per step in vector lanes) against the
@@ -884,7 +896,8 @@ TEST(DecoderKernels, EdgeStageMatchesTheOneEdgeFunctionsBitwise)
         // The stored change, and the traversal's symbol errors from it, both ways along the edge.
         const EdgeChange& stored = ws.edgeChanges[e];
         differing += std::memcmp(&stored.c, &change.c, sizeof change.c) != 0 ||
-                     std::bit_cast<std::uint32_t>(stored.relative) != std::bit_cast<std::uint32_t>(change.relative);
+                     std::bit_cast<std::uint32_t>(stored.commonBound) !=
+                         std::bit_cast<std::uint32_t>(change.relative > 0 ? std::min(0.3f, 0.15f / change.relative) : 0.0f);
         const MatchScales scales(t);
         const EqualizedChange backward = equalizedChange(ws, edge.b, edge.a);
         for (int s = 0; s < kSymbolCount; ++s) {
