@@ -191,6 +191,20 @@ private:
     const cv::Vec2f* gridRow_ = nullptr;
 };
 
+// The position of a mask word's lowest set bit, for bits != 0: on x86-64 one
+// rep bsf into a 64-bit register, where GCC 12 wraps std::countr_zero's int
+// in an xor that clears the register first (graph.cpp's lowestBit).
+[[gnu::always_inline]] inline std::size_t lowestBit(std::uint64_t bits)
+{
+#if defined(__x86_64__)
+    std::uint64_t at;
+    asm("rep bsf %1, %0" : "=r"(at) : "rm"(bits) : "cc");
+    return at;
+#else
+    return static_cast<unsigned>(std::countr_zero(bits));
+#endif
+}
+
 // Bit i set where lane i of a comparison mask is (all ones, else 0).
 int laneBits(Ints mask)
 {
@@ -406,6 +420,7 @@ STRIA_X86_CLONES void computePoints(DecoderWorkspace& ws)
     // pattern edge, free after the traversal).
     std::int32_t* rowPoint = ws.candidates.get();
     const int edgeCount = ws.pattern.edgeCount();
+    const SymbolCode* symbols = ws.pattern.edgeSymbols().data();
 
     // A row's edges go through each step below together, a batch of up to
     // kBatch (on the stack) at a time: one loop per step, whose iterations
@@ -435,39 +450,48 @@ STRIA_X86_CLONES void computePoints(DecoderWorkspace& ws)
         // and waited for them (1388x1038: depth 3.0-3.2 -> 2.1-2.8 ms warm),
         // and the labels come from the graph stage's time, long evicted
         // (780x580: 1.09-1.14 -> 1.04-1.08 ms).
-        // One loop for both, 4 label lines and 3 pixel lines per step (the
-        // labels take 4 bytes a pixel, the pixels 3): a quarter of the loop
-        // overhead of a loop per line. Addresses as integers: the last step
-        // may reach up to 3 lines past either row (past the buffers' ends
-        // in the last row), harmless for a prefetch, not for a pointer.
+        // One loop for both, 8 label lines and 6 pixel lines per step (the
+        // labels take 4 bytes a pixel, the pixels 3): an eighth of the loop
+        // overhead of a loop per line (with 4 and 3, callgrind's predictor
+        // missed the loop's branch 1.6 k times more per 1388x1038 decode
+        // once step 1 had changed: aliasing). Addresses as integers: the
+        // last step may reach up to 7 lines past either row (past the
+        // buffers' ends in the last row), harmless for a prefetch, not for
+        // a pointer.
         if (y + 1 < h) {
             const std::uintptr_t nextLabels = reinterpret_cast<std::uintptr_t>(label + w);
             const std::uintptr_t nextPixels = reinterpret_cast<std::uintptr_t>(ws.frame.row(y + 1));
-            for (std::uintptr_t b = 0, p = 0; b < 4u * static_cast<unsigned>(w); b += 256, p += 192) {
-                for (int k = 0; k < 4; ++k) __builtin_prefetch(reinterpret_cast<const void*>(nextLabels + b + 64 * k));
-                for (int k = 0; k < 3; ++k) __builtin_prefetch(reinterpret_cast<const void*>(nextPixels + p + 64 * k));
+            for (std::uintptr_t b = 0, p = 0; b < 4u * static_cast<unsigned>(w); b += 512, p += 384) {
+                for (int k = 0; k < 8; ++k) __builtin_prefetch(reinterpret_cast<const void*>(nextLabels + b + 64 * k));
+                for (int k = 0; k < 6; ++k) __builtin_prefetch(reinterpret_cast<const void*>(nextPixels + p + 64 * k));
             }
         }
         // 64-bit count and columns: as int, GCC sign-extended them per change.
         std::ptrdiff_t count = 0;
-        // The stripe left of the next label change: the masks mark every
-        // change, so the pixels from the previous change (or the row's
-        // start) to the next share a label. Carried from change to change,
-        // it halves step 1's look-ups.
-        std::int32_t leftStripe = stripes[label[0]];
+        // The stripe left of the next label change, plus 1: the masks mark
+        // every change, so the pixels from the previous change (or the
+        // row's start) to the next share a label. Carried from change to
+        // change, it halves step 1's look-ups.
+        std::int32_t leftStripePlus1 = stripes[label[0]] + 1;
         for (std::ptrdiff_t x0 = 0; x0 < w - 1; x0 += 64) {
             // Step 1: label changes between regions decoded as consecutive
             // stripes k, k + 1, from the regions stage's border masks, gathered without a
             // branch per change: whether two neighbours share a label, and
             // whether their stripes are consecutive, is noise to a branch
             // predictor (85 000 and 22 000 mispredictions per 780x580 frame).
+            // 12 instructions per change (x86-64-v3): the window's first
+            // sample from x0's by one add (the label index folds its offset
+            // in), the stripe carried plus 1 (one lea for the test below,
+            // where a subtraction and an increment needed a copy), the
+            // bit's position by lowestBit (780x580: 15 before).
+            const std::ptrdiff_t firstOfWord = x0 - 2 * kSearchRadius;
             for (std::uint64_t bits = borders[x0 / 64]; bits; bits &= bits - 1) {
-                const std::ptrdiff_t x = x0 + std::countr_zero(bits);
-                const std::int32_t rightStripe = stripes[label[x + 1]];
-                firsts[count] = static_cast<std::int32_t>(x - 2 * kSearchRadius);
-                // leftStripe - rightStripe = -1 or +1 (both decoded, as kUndecoded is far from every stripe).
-                count += ((static_cast<unsigned>(leftStripe - rightStripe) + 1) & ~2u) == 0;
-                leftStripe = rightStripe;
+                const std::ptrdiff_t first = firstOfWord + static_cast<std::ptrdiff_t>(lowestBit(bits));
+                const std::int32_t rightStripe = stripes[label[first + 2 * kSearchRadius + 1]];
+                firsts[count] = static_cast<std::int32_t>(first);
+                // leftStripe + 1 - rightStripe = 0 or 2 (both decoded, as kUndecoded is far from every stripe).
+                count += ((static_cast<unsigned>(leftStripePlus1) - static_cast<unsigned>(rightStripe)) & ~2u) == 0;
+                leftStripePlus1 = rightStripe + 1;
             }
             if (count > 0 && (count > kBatch - 64 || x0 + 64 >= w - 1)) {
                 const int batch = static_cast<int>(count);
@@ -479,15 +503,24 @@ STRIA_X86_CLONES void computePoints(DecoderWorkspace& ws)
                 // next float, centroidX, over 0) lands in the next edge's
                 // weights, which that edge overwrites, or in the spare one.
                 static_assert(offsetof(Region, range) + sizeof(Lanes) <= sizeof(Region));
+                // The labels at x = first + 2 kSearchRadius by a 64-bit first
+                // (one sign-extending load, the offset in the address), the
+                // orientation and std::min(leftStripe, rightStripe) by
+                // arithmetic (the stripes differ by 1; GCC compared them
+                // three times, with a branch): 36 -> 28 instructions per
+                // edge (780x580, x86-64-v3).
                 for (int j = 0; j < batch; ++j) {
-                    const int x = firsts[j] + 2 * kSearchRadius;
-                    const Region& left = regions[label[x]];
-                    const Region& right = regions[label[x + 1]];
-                    const int leftStripe = stripes[label[x]], rightStripe = stripes[label[x + 1]];
-                    const int edge = std::min(leftStripe, rightStripe);
+                    const std::ptrdiff_t first = firsts[j];
+                    const std::int32_t leftLabel = label[first + 2 * kSearchRadius];
+                    const std::int32_t rightLabel = label[first + 2 * kSearchRadius + 1];
+                    const Region& left = regions[leftLabel];
+                    const Region& right = regions[rightLabel];
+                    const int leftStripe = stripes[leftLabel], rightStripe = stripes[rightLabel];
+                    // 1 if the stripe index rises (rightStripe = leftStripe + 1), else 0.
+                    const int rising = static_cast<int>(static_cast<unsigned>(leftStripe - rightStripe) >> 31);
+                    const int edge = rightStripe - rising;  // std::min(leftStripe, rightStripe)
                     Lanes numerator, leftRange, rightRange;
-                    std::memcpy(&numerator, &kSignedSigns[ws.pattern.edgeSymbol(edge)][rightStripe > leftStripe ? 1 : 0],
-                                sizeof numerator);
+                    std::memcpy(&numerator, &kSignedSigns[symbols[edge]][rising], sizeof numerator);
                     std::memcpy(&leftRange, left.range.data(), sizeof leftRange);
                     std::memcpy(&rightRange, right.range.data(), sizeof rightRange);
                     const Lanes one = Lanes{} + 1.0f, range = 0.5f * (leftRange + rightRange);
