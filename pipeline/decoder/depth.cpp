@@ -611,7 +611,7 @@ STRIA_X86_CLONES void computePoints(DecoderWorkspace& ws)
                     for (int bits = laneBits(first == kCentre); bits; bits &= bits - 1) {
                         const int i = std::countr_zero(static_cast<unsigned>(bits));
                         projectedGradientsReference(row, x[i] + 2 * kSearchRadius, 1, ws.rgbOffset, m, weights[j0 + i],
-                                                    &s[i][2 * kCentre]);
+                                                    &samples[j0 + i][2 * kCentre]);
                     }
                     Lanes d[5];
                     for (int i = 0; i < 4; ++i) std::memcpy(&d[i], s[i] + first[i], sizeof(Lanes));
