@@ -32,6 +32,9 @@
 #elif defined(__ARM_NEON)
 #include <arm_neon.h>
 #endif
+#if defined(__x86_64__)
+#include <immintrin.h>
+#endif
 
 namespace stria::pipeline {
 namespace {
@@ -65,6 +68,21 @@ using Pair = std::int32_t __attribute__((vector_size(8)));
 // Four int lanes (comparison masks of Lanes), two long ones (of Doubles).
 using Ints = std::int32_t __attribute__((vector_size(16)));
 using Longs = std::int64_t __attribute__((vector_size(16)));
+// Four double lanes and four long ones (AVX, in x86-64-v3 code only).
+using Doubles4 = double __attribute__((vector_size(32)));
+using Longs4 = std::int64_t __attribute__((vector_size(32)));
+
+// Four records of 4 doubles to 4 fields of 4 lanes: v[j][i] = v[i][j] before.
+[[gnu::always_inline]] inline void transposeDoubles(Doubles4 v[4])
+{
+    const Longs4 low{0, 4, 2, 6}, high{1, 5, 3, 7};
+    const Doubles4 t0 = __builtin_shuffle(v[0], v[1], low), t1 = __builtin_shuffle(v[0], v[1], high);
+    const Doubles4 t2 = __builtin_shuffle(v[2], v[3], low), t3 = __builtin_shuffle(v[2], v[3], high);
+    v[0] = __builtin_shuffle(t0, t2, Longs4{0, 1, 4, 5});
+    v[1] = __builtin_shuffle(t1, t3, Longs4{0, 1, 4, 5});
+    v[2] = __builtin_shuffle(t0, t2, Longs4{2, 3, 6, 7});
+    v[3] = __builtin_shuffle(t1, t3, Longs4{2, 3, 6, 7});
+}
 
 // Grid points a[0], a[1] and b[0], b[1] (the two lanes' cell corners in one
 // grid row), widened exactly to double: out = x of [0], y of [0], x of [1],
@@ -134,6 +152,36 @@ public:
         yn = topY * (1 - fy_) + bottomY * fy_;
     }
 
+#if defined(__x86_64__)
+    // The same for 4 lanes (AVX), bit for bit: a lane's cell corners (x, y
+    // of columns x0, x0 + 1: 4 floats) widened to 4 doubles by one
+    // vcvtps2pd, the 4 lanes' then transposed to 4 fields (GCC 12 widened a
+    // vector of 4 floats or ints to doubles in halves, through the stack).
+    [[gnu::target("arch=x86-64-v3"), gnu::always_inline]] void at4(const Doubles4& u, Doubles4& xn, Doubles4& yn) const
+    {
+        const Doubles4 zero{}, last = zero + (gridWidth_ - 1.000001);
+        Doubles4 gx = exactInverse_ ? u * inverseStep_ : u / gridStep_;
+        gx = gx < zero ? zero : gx;  // std::max(gx, 0.0)
+        gx = last < gx ? last : gx;  // std::min(gx, last)
+        const __m128i x0 = _mm256_cvttpd_epi32(__m256d(gx));
+        const Doubles4 fx = gx - Doubles4(_mm256_cvtepi32_pd(x0));
+        Doubles4 top[4], bottom[4];
+        for (int i = 0; i < 4; ++i) {
+            const float* cell = &gridRow_[Ints(x0)[i]][0];
+            top[i] = Doubles4(_mm256_cvtps_pd(_mm_loadu_ps(cell)));
+            bottom[i] = Doubles4(_mm256_cvtps_pd(_mm_loadu_ps(cell + 2 * gridWidth_)));
+        }
+        transposeDoubles(top);
+        transposeDoubles(bottom);
+        const Doubles4 topX = top[0] * (1 - fx) + top[2] * fx;
+        const Doubles4 topY = top[1] * (1 - fx) + top[3] * fx;
+        const Doubles4 bottomX = bottom[0] * (1 - fx) + bottom[2] * fx;
+        const Doubles4 bottomY = bottom[1] * (1 - fx) + bottom[3] * fx;
+        xn = topX * (1 - fy_) + bottomX * fy_;
+        yn = topY * (1 - fy_) + bottomY * fy_;
+    }
+#endif
+
 private:
     int gridStep_;
     double inverseStep_;
@@ -142,6 +190,20 @@ private:
     double fy_ = 0;
     const cv::Vec2f* gridRow_ = nullptr;
 };
+
+// The position of a mask word's lowest set bit, for bits != 0: on x86-64 one
+// rep bsf into a 64-bit register, where GCC 12 wraps std::countr_zero's int
+// in an xor that clears the register first (graph.cpp's lowestBit).
+[[gnu::always_inline]] inline std::size_t lowestBit(std::uint64_t bits)
+{
+#if defined(__x86_64__)
+    std::uint64_t at;
+    asm("rep bsf %1, %0" : "=r"(at) : "rm"(bits) : "cc");
+    return at;
+#else
+    return static_cast<unsigned>(std::countr_zero(bits));
+#endif
+}
 
 // Bit i set where lane i of a comparison mask is (all ones, else 0).
 int laneBits(Ints mask)
@@ -157,6 +219,174 @@ int laneBits(Ints mask)
     return bits;
 #endif
 }
+
+// Step 5 of computePoints for one batch of a row's edges: the point where
+// the camera ray through (u, y) meets the edge's light plane
+// (RigModel::intersectRay's arithmetic and tests), two edges per double lanes
+// (one division for two points), then the points kept, one per edge and row,
+// written straight to the output (through a staging array, each point was
+// stored and copied: 0.26 M instructions per 780x580 decode). Edge j at
+// columns[j] (u), its pattern edge edges[j], located if locatedMasks[j]
+// (all ones, else 0); rowPoint as in computePoints. False if the output is
+// full (ws.truncated set: the frame is cut there).
+[[gnu::always_inline]] inline bool pointsOfBatchPairs(DecoderWorkspace& ws, const RowRays& rays, const double* columns,
+                                                      const std::int32_t* edges, const std::int64_t* locatedMasks,
+                                                      int batch, float rowV, std::int32_t* rowPoint)
+{
+    const Plane* planes = ws.lightPlanes.get();
+    // The count and the output in locals: through ws, GCC
+    // reloaded them after every point's store.
+    ScanPoint* const points = ws.points;
+    int pointCount = ws.pointCount;
+    const int maxPoints = ws.maxPoints;
+    for (int j = 0; j < batch; j += 2) {
+        Doubles xn, yn, u;
+        std::memcpy(&u, &columns[j], sizeof u);
+        rays.at(u, xn, yn);
+        const Plane &p0 = planes[edges[j]], &p1 = planes[edges[j + 1]];
+        // intersectRay's dot product starts from s = 0: (0 + a) + b
+        // differs from a + b only in a zero's sign, when the sum
+        // is zero, which is rejected either way; the z term is n[2] * 1.
+        const Doubles denom = Doubles{p0.normal[0], p1.normal[0]} * xn +
+                              Doubles{p0.normal[1], p1.normal[1]} * yn + Doubles{p0.normal[2], p1.normal[2]};
+        const Doubles t = Doubles{-p0.d, -p1.d} / denom;
+        // Not parallel (|denom| >= 1e-12) and in front of the camera:
+        // then t's bits (t > 0: not all zero), else +0's (all
+        // zero). GCC 12 stores a comparison mask as such lane by
+        // lane through scalar registers (and 1, neg); a select of
+        // t is one andpd. (|denom| >= 1e-12 as two tests, not as
+        // ~(denom < 1e-12 & denom > -1e-12): they differ only for
+        // a NaN denom, whose t is NaN and fails t > 0.)
+        const Doubles valid = (t > Doubles{}) & ((denom >= 1e-12) | (denom <= -1e-12)) ? t : Doubles{};
+        // Only edges located in step 4 (a mask of t's bits: GCC
+        // scalarised a mask of the comparisons' masks).
+        Longs located;
+        std::memcpy(&located, &locatedMasks[j], sizeof located);
+        const Longs kept = std::bit_cast<Longs>(valid) & located;
+        const Doubles px = xn * t, py = yn * t;
+        for (int i = 0; i < 2 && j + i < batch; ++i) {
+            if (!kept[i]) continue;
+            const int edge = edges[j + i];
+            const ScanPoint scanPoint{
+                cv::Vec3f(static_cast<float>(px[i]), static_cast<float>(py[i]), static_cast<float>(t[i])),
+                cv::Point2f(static_cast<float>(columns[j + i]), rowV), edge};
+            // Along one projector ray the camera depth grows with the
+            // distance from the projector: the smaller z is the lit point.
+            if (const int earlier = rowPoint[edge]; earlier >= 0) {
+                if (scanPoint.position[2] < points[earlier].position[2]) points[earlier] = scanPoint;
+                continue;
+            }
+            if (pointCount == maxPoints) {
+                ws.pointCount = pointCount;
+                ws.truncated = true;  // the frame is cut here
+                return false;
+            }
+            rowPoint[edge] = pointCount;
+            points[pointCount++] = scanPoint;
+        }
+    }
+    ws.pointCount = pointCount;
+    return true;
+}
+
+#if defined(__x86_64__)
+// Step 5 for 4 edges at a time in 256-bit vectors (x86-64-v3 and -v4 CPUs):
+// pointsOfBatchPairs' arithmetic, per lane the same operations in the same
+// order, so the same floats and points; half its vector instructions, and
+// the grid cells, light planes and points moved by 4 x 4 transposes rather
+// than lane by lane (780x580: 72 -> 48 instructions per edge).
+[[gnu::target("arch=x86-64-v3")]] bool pointsOfBatchQuads(DecoderWorkspace& ws, const RowRays& rays,
+                                                          const double* columns, const std::int32_t* edges,
+                                                          const std::int64_t* locatedMasks, int batch, float rowV,
+                                                          std::int32_t* rowPoint)
+{
+    static_assert(sizeof(Plane) == 4 * sizeof(double) && offsetof(Plane, d) == 3 * sizeof(double));
+    static_assert(offsetof(ScanPoint, pixel) == 3 * sizeof(float) && offsetof(ScanPoint, edge) == 5 * sizeof(float));
+    const Plane* planes = ws.lightPlanes.get();
+    ScanPoint* const points = ws.points;
+    int pointCount = ws.pointCount;
+    const int maxPoints = ws.maxPoints;
+    // A copy of the rays: through the reference, GCC reloaded their fields
+    // (and recomputed what they give) after every point's store.
+    const RowRays rowRays = rays;
+    ScanPoint* next = points + pointCount;  // points[pointCount] (as a pointer: no index arithmetic per point)
+    for (int j = 0; j < batch; j += 4) {  // lanes past the batch (the arrays have room) not located
+        Doubles4 u, xn, yn;
+        std::memcpy(&u, &columns[j], sizeof u);
+        rowRays.at4(u, xn, yn);
+        Doubles4 plane[4];  // normal[0], normal[1], normal[2] and d of each lane's edge
+        for (int i = 0; i < 4; ++i) plane[i] = Doubles4(_mm256_loadu_pd(&planes[edges[j + i]].normal[0]));
+        transposeDoubles(plane);  // then each field's 4 lanes
+        const Doubles4 denom = plane[0] * xn + plane[1] * yn + plane[2];
+        const Doubles4 t = -plane[3] / denom;
+        // pointsOfBatchPairs' kept (t's bits where valid and located, not
+        // zero) as a mask: t > 0 has bits.
+        Longs4 located;
+        std::memcpy(&located, &locatedMasks[j], sizeof located);
+        const Longs4 kept = (t > Doubles4{}) & ((denom >= 1e-12) | (denom <= -1e-12)) & located;
+        const int keptBits = _mm256_movemask_pd(__m256d(kept));
+        const Doubles4 px = xn * t, py = yn * t;
+        // Per lane a point's first 4 floats: position and u.
+        Lanes record[4] = {Lanes(_mm256_cvtpd_ps(__m256d(px))), Lanes(_mm256_cvtpd_ps(__m256d(py))),
+                           Lanes(_mm256_cvtpd_ps(__m256d(t))), Lanes(_mm256_cvtpd_ps(__m256d(u)))};
+        transpose4(record);
+        auto store = [&](ScanPoint& point, int i, int edge) {
+            std::memcpy(static_cast<void*>(&point), &record[i], sizeof record[i]);
+            point.pixel.y = rowV;
+            point.edge = edge;
+        };
+        // Lane i's point, as pointsOfBatchPairs keeps it; false if the output is full.
+        auto add = [&](int i) {
+            const int edge = edges[j + i];
+            if (const int earlier = rowPoint[edge]; earlier >= 0) {
+                if (record[i][2] < points[earlier].position[2]) store(points[earlier], i, edge);
+                return true;
+            }
+            if (pointCount == maxPoints) return false;
+            rowPoint[edge] = pointCount++;
+            store(*next++, i, edge);
+            return true;
+        };
+        // All 4 kept but in a batch's last 4 (and a few not located): then
+        // a test per lane, whose outcome follows the batch's size, noise
+        // to a branch predictor, 1 per batch rather than up to 3.
+        bool room = true;
+        if (keptBits == 0xf)
+            room = add(0) && add(1) && add(2) && add(3);
+        else
+            for (int i = 0; i < 4 && room; ++i)
+                if (keptBits & 1 << i) room = add(i);
+        if (!room) {
+            ws.pointCount = pointCount;
+            ws.truncated = true;
+            return false;
+        }
+    }
+    ws.pointCount = pointCount;
+    return true;
+}
+
+// The version per CPU (an ifunc, as the window kernels of simd_edges.cpp):
+// the x86-64-v3 one also on v4 CPUs.
+[[gnu::target("default")]] bool pointsOfBatch(DecoderWorkspace& ws, const RowRays& rays, const double* columns,
+                                              const std::int32_t* edges, const std::int64_t* locatedMasks, int batch,
+                                              float rowV, std::int32_t* rowPoint)
+{
+    return pointsOfBatchPairs(ws, rays, columns, edges, locatedMasks, batch, rowV, rowPoint);
+}
+[[gnu::target("arch=x86-64-v3")]] bool pointsOfBatch(DecoderWorkspace& ws, const RowRays& rays, const double* columns,
+                                                     const std::int32_t* edges, const std::int64_t* locatedMasks,
+                                                     int batch, float rowV, std::int32_t* rowPoint)
+{
+    return pointsOfBatchQuads(ws, rays, columns, edges, locatedMasks, batch, rowV, rowPoint);
+}
+#else
+bool pointsOfBatch(DecoderWorkspace& ws, const RowRays& rays, const double* columns, const std::int32_t* edges,
+                   const std::int64_t* locatedMasks, int batch, float rowV, std::int32_t* rowPoint)
+{
+    return pointsOfBatchPairs(ws, rays, columns, edges, locatedMasks, batch, rowV, rowPoint);
+}
+#endif
 
 }  // namespace
 
@@ -190,6 +420,7 @@ STRIA_X86_CLONES void computePoints(DecoderWorkspace& ws)
     // pattern edge, free after the traversal).
     std::int32_t* rowPoint = ws.candidates.get();
     const int edgeCount = ws.pattern.edgeCount();
+    const SymbolCode* symbols = ws.pattern.edgeSymbols().data();
 
     // A row's edges go through each step below together, a batch of up to
     // kBatch (on the stack) at a time: one loop per step, whose iterations
@@ -219,39 +450,48 @@ STRIA_X86_CLONES void computePoints(DecoderWorkspace& ws)
         // and waited for them (1388x1038: depth 3.0-3.2 -> 2.1-2.8 ms warm),
         // and the labels come from the graph stage's time, long evicted
         // (780x580: 1.09-1.14 -> 1.04-1.08 ms).
-        // One loop for both, 4 label lines and 3 pixel lines per step (the
-        // labels take 4 bytes a pixel, the pixels 3): a quarter of the loop
-        // overhead of a loop per line. Addresses as integers: the last step
-        // may reach up to 3 lines past either row (past the buffers' ends
-        // in the last row), harmless for a prefetch, not for a pointer.
+        // One loop for both, 8 label lines and 6 pixel lines per step (the
+        // labels take 4 bytes a pixel, the pixels 3): an eighth of the loop
+        // overhead of a loop per line (with 4 and 3, callgrind's predictor
+        // missed the loop's branch 1.6 k times more per 1388x1038 decode
+        // once step 1 had changed: aliasing). Addresses as integers: the
+        // last step may reach up to 7 lines past either row (past the
+        // buffers' ends in the last row), harmless for a prefetch, not for
+        // a pointer.
         if (y + 1 < h) {
             const std::uintptr_t nextLabels = reinterpret_cast<std::uintptr_t>(label + w);
             const std::uintptr_t nextPixels = reinterpret_cast<std::uintptr_t>(ws.frame.row(y + 1));
-            for (std::uintptr_t b = 0, p = 0; b < 4u * static_cast<unsigned>(w); b += 256, p += 192) {
-                for (int k = 0; k < 4; ++k) __builtin_prefetch(reinterpret_cast<const void*>(nextLabels + b + 64 * k));
-                for (int k = 0; k < 3; ++k) __builtin_prefetch(reinterpret_cast<const void*>(nextPixels + p + 64 * k));
+            for (std::uintptr_t b = 0, p = 0; b < 4u * static_cast<unsigned>(w); b += 512, p += 384) {
+                for (int k = 0; k < 8; ++k) __builtin_prefetch(reinterpret_cast<const void*>(nextLabels + b + 64 * k));
+                for (int k = 0; k < 6; ++k) __builtin_prefetch(reinterpret_cast<const void*>(nextPixels + p + 64 * k));
             }
         }
         // 64-bit count and columns: as int, GCC sign-extended them per change.
         std::ptrdiff_t count = 0;
-        // The stripe left of the next label change: the masks mark every
-        // change, so the pixels from the previous change (or the row's
-        // start) to the next share a label. Carried from change to change,
-        // it halves step 1's look-ups.
-        std::int32_t leftStripe = stripes[label[0]];
+        // The stripe left of the next label change, plus 1: the masks mark
+        // every change, so the pixels from the previous change (or the
+        // row's start) to the next share a label. Carried from change to
+        // change, it halves step 1's look-ups.
+        std::int32_t leftStripePlus1 = stripes[label[0]] + 1;
         for (std::ptrdiff_t x0 = 0; x0 < w - 1; x0 += 64) {
             // Step 1: label changes between regions decoded as consecutive
             // stripes k, k + 1, from the regions stage's border masks, gathered without a
             // branch per change: whether two neighbours share a label, and
             // whether their stripes are consecutive, is noise to a branch
             // predictor (85 000 and 22 000 mispredictions per 780x580 frame).
+            // 12 instructions per change (x86-64-v3): the window's first
+            // sample from x0's by one add (the label index folds its offset
+            // in), the stripe carried plus 1 (one lea for the test below,
+            // where a subtraction and an increment needed a copy), the
+            // bit's position by lowestBit (780x580: 15 before).
+            const std::ptrdiff_t firstOfWord = x0 - 2 * kSearchRadius;
             for (std::uint64_t bits = borders[x0 / 64]; bits; bits &= bits - 1) {
-                const std::ptrdiff_t x = x0 + std::countr_zero(bits);
-                const std::int32_t rightStripe = stripes[label[x + 1]];
-                firsts[count] = static_cast<std::int32_t>(x - 2 * kSearchRadius);
-                // leftStripe - rightStripe = -1 or +1 (both decoded, as kUndecoded is far from every stripe).
-                count += ((static_cast<unsigned>(leftStripe - rightStripe) + 1) & ~2u) == 0;
-                leftStripe = rightStripe;
+                const std::ptrdiff_t first = firstOfWord + static_cast<std::ptrdiff_t>(lowestBit(bits));
+                const std::int32_t rightStripe = stripes[label[first + 2 * kSearchRadius + 1]];
+                firsts[count] = static_cast<std::int32_t>(first);
+                // leftStripe + 1 - rightStripe = 0 or 2 (both decoded, as kUndecoded is far from every stripe).
+                count += ((static_cast<unsigned>(leftStripePlus1) - static_cast<unsigned>(rightStripe)) & ~2u) == 0;
+                leftStripePlus1 = rightStripe + 1;
             }
             if (count > 0 && (count > kBatch - 64 || x0 + 64 >= w - 1)) {
                 const int batch = static_cast<int>(count);
@@ -263,15 +503,24 @@ STRIA_X86_CLONES void computePoints(DecoderWorkspace& ws)
                 // next float, centroidX, over 0) lands in the next edge's
                 // weights, which that edge overwrites, or in the spare one.
                 static_assert(offsetof(Region, range) + sizeof(Lanes) <= sizeof(Region));
+                // The labels at x = first + 2 kSearchRadius by a 64-bit first
+                // (one sign-extending load, the offset in the address), the
+                // orientation and std::min(leftStripe, rightStripe) by
+                // arithmetic (the stripes differ by 1; GCC compared them
+                // three times, with a branch): 36 -> 28 instructions per
+                // edge (780x580, x86-64-v3).
                 for (int j = 0; j < batch; ++j) {
-                    const int x = firsts[j] + 2 * kSearchRadius;
-                    const Region& left = regions[label[x]];
-                    const Region& right = regions[label[x + 1]];
-                    const int leftStripe = stripes[label[x]], rightStripe = stripes[label[x + 1]];
-                    const int edge = std::min(leftStripe, rightStripe);
+                    const std::ptrdiff_t first = firsts[j];
+                    const std::int32_t leftLabel = label[first + 2 * kSearchRadius];
+                    const std::int32_t rightLabel = label[first + 2 * kSearchRadius + 1];
+                    const Region& left = regions[leftLabel];
+                    const Region& right = regions[rightLabel];
+                    const int leftStripe = stripes[leftLabel], rightStripe = stripes[rightLabel];
+                    // 1 if the stripe index rises (rightStripe = leftStripe + 1), else 0.
+                    const int rising = static_cast<int>(static_cast<unsigned>(leftStripe - rightStripe) >> 31);
+                    const int edge = rightStripe - rising;  // std::min(leftStripe, rightStripe)
                     Lanes numerator, leftRange, rightRange;
-                    std::memcpy(&numerator, &kSignedSigns[ws.pattern.edgeSymbol(edge)][rightStripe > leftStripe ? 1 : 0],
-                                sizeof numerator);
+                    std::memcpy(&numerator, &kSignedSigns[symbols[edge]][rising], sizeof numerator);
                     std::memcpy(&leftRange, left.range.data(), sizeof leftRange);
                     std::memcpy(&rightRange, right.range.data(), sizeof rightRange);
                     const Lanes one = Lanes{} + 1.0f, range = 0.5f * (leftRange + rightRange);
@@ -362,7 +611,7 @@ STRIA_X86_CLONES void computePoints(DecoderWorkspace& ws)
                     for (int bits = laneBits(first == kCentre); bits; bits &= bits - 1) {
                         const int i = std::countr_zero(static_cast<unsigned>(bits));
                         projectedGradientsReference(row, x[i] + 2 * kSearchRadius, 1, ws.rgbOffset, m, weights[j0 + i],
-                                                    &s[i][2 * kCentre]);
+                                                    &samples[j0 + i][2 * kCentre]);
                     }
                     Lanes d[5];
                     for (int i = 0; i < 4; ++i) std::memcpy(&d[i], s[i] + first[i], sizeof(Lanes));
@@ -388,65 +637,11 @@ STRIA_X86_CLONES void computePoints(DecoderWorkspace& ws)
                         std::memcpy(&locatedMasks[j0 + i], &mask, sizeof mask);
                     }
                 }
-                // Step 5: the point where the camera ray through (u, y)
-                // meets the edge's light plane (RigModel::intersectRay's
-                // arithmetic and tests), two edges per double lanes (one
-                // division for two points), then the points kept, one per
-                // edge and row, written straight to the output (through a
-                // staging array, each point was stored and copied: 0.26 M
-                // instructions per 780x580 decode).
-                // The count and the output in locals: through ws, GCC
-                // reloaded them after every point's store.
-                ScanPoint* const points = ws.points;
-                int pointCount = ws.pointCount;
-                const int maxPoints = ws.maxPoints;
-                for (int j = 0; j < batch; j += 2) {
-                    Doubles xn, yn, u;
-                    std::memcpy(&u, &columns[j], sizeof u);
-                    rays.at(u, xn, yn);
-                    const Plane &p0 = ws.lightPlanes[edges[j]], &p1 = ws.lightPlanes[edges[j + 1]];
-                    // intersectRay's dot product starts from s = 0: (0 + a) + b
-                    // differs from a + b only in a zero's sign, when the sum
-                    // is zero, which is rejected either way; the z term is n[2] * 1.
-                    const Doubles denom = Doubles{p0.normal[0], p1.normal[0]} * xn +
-                                          Doubles{p0.normal[1], p1.normal[1]} * yn + Doubles{p0.normal[2], p1.normal[2]};
-                    const Doubles t = Doubles{-p0.d, -p1.d} / denom;
-                    // Not parallel (|denom| >= 1e-12) and in front of the camera:
-                    // then t's bits (t > 0: not all zero), else +0's (all
-                    // zero). GCC 12 stores a comparison mask as such lane by
-                    // lane through scalar registers (and 1, neg); a select of
-                    // t is one andpd. (|denom| >= 1e-12 as two tests, not as
-                    // ~(denom < 1e-12 & denom > -1e-12): they differ only for
-                    // a NaN denom, whose t is NaN and fails t > 0.)
-                    const Doubles valid = (t > Doubles{}) & ((denom >= 1e-12) | (denom <= -1e-12)) ? t : Doubles{};
-                    // Only edges located in step 4 (a mask of t's bits: GCC
-                    // scalarised a mask of the comparisons' masks).
-                    Longs located;
-                    std::memcpy(&located, &locatedMasks[j], sizeof located);
-                    const Longs kept = std::bit_cast<Longs>(valid) & located;
-                    const Doubles px = xn * t, py = yn * t;
-                    for (int i = 0; i < 2 && j + i < batch; ++i) {
-                        if (!kept[i]) continue;
-                        const int edge = edges[j + i];
-                        const ScanPoint scanPoint{
-                            cv::Vec3f(static_cast<float>(px[i]), static_cast<float>(py[i]), static_cast<float>(t[i])),
-                            cv::Point2f(static_cast<float>(columns[j + i]), rowV), edge};
-                        // Along one projector ray the camera depth grows with the
-                        // distance from the projector: the smaller z is the lit point.
-                        if (const int earlier = rowPoint[edge]; earlier >= 0) {
-                            if (scanPoint.position[2] < points[earlier].position[2]) points[earlier] = scanPoint;
-                            continue;
-                        }
-                        if (pointCount == maxPoints) {
-                            ws.pointCount = pointCount;
-                            ws.truncated = true;  // the frame is cut here
-                            return;
-                        }
-                        rowPoint[edge] = pointCount;
-                        points[pointCount++] = scanPoint;
-                    }
-                }
-                ws.pointCount = pointCount;
+                // Step 5: the points (pointsOfBatch, above), lanes past the
+                // batch's last edge (step 4 located copies of it) kept by none.
+                for (int i = batch; i < batch + 3; ++i) locatedMasks[i] = 0;
+                if (!pointsOfBatch(ws, rays, columns.data(), edges.data(), locatedMasks.data(), batch, rowV, rowPoint))
+                    return;
                 count = 0;
             }
         }
