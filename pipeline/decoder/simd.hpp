@@ -31,7 +31,9 @@
 // the edge sample windows as one definition per target (simd_edges.cpp: the
 // AVX2 body gathers a channel's 8 samples by vpshufb), and the region copy
 // pass (regions.cpp: 4 pixels per byte shuffle on x86-64-v3; tbl on
-// AArch64). tests/decoder runs the kernel tests again under qemu-x86_64 on
+// AArch64), and the region medians as one definition per
+// target (simd_regions.cpp: the AVX2 bodies take 8 pixels per compare and
+// count the values below t). tests/decoder runs the kernel tests again under qemu-x86_64 on
 // CPUs without AVX-512 and without AVX (the AVX2 and SSE2 versions).
 #if defined(__x86_64__)
 #define STRIA_X86_CLONES __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))

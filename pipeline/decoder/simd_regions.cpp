@@ -8,6 +8,9 @@
 #elif defined(__SSE2__)
 #include <emmintrin.h>
 #endif
+#if defined(__x86_64__)
+#include <immintrin.h>
+#endif
 
 namespace stria::pipeline {
 
@@ -24,6 +27,10 @@ std::array<std::uint8_t, 3> channelMediansReference(const std::uint32_t* pixels,
     }
     return median;
 }
+
+namespace {
+std::array<std::uint8_t, 3> mediansBody(const std::uint32_t* pixels, int count);
+}  // namespace
 
 #if defined(__ARM_NEON) || defined(__SSE2__)
 namespace {
@@ -355,10 +362,210 @@ inline std::array<int, 3> countAtLeast(const std::uint8_t* bytes, int blocks, co
     return pixelSums(blockCounts(bytes, blocks, limitOf(static_cast<std::uint32_t>(t[0] | t[1] << 8 | t[2] << 16))));
 }
 
+#if defined(__x86_64__)
+// The x86-64-v3 version of channelMediansOfFourAlike (a function per target,
+// GCC's multiversioning: an ifunc): 8 pixels (32 bytes) per compare, and the
+// values below t counted, where the SSE2 body counts those at least t:
+// t > x takes the block from memory as the compare's second operand (VEX
+// loads need no alignment), 2 instructions per 8 pixels where SSE2 takes 3
+// per 4 (load, compare, subtract). The counts at least t are then the
+// slots (4 per block of 4: 4 * blocks, the pad entries' value 0 counted
+// below every t) less those below, in bytes modulo 256: exact, as at most
+// 255 are at least t. A region's blocks of 4 in pairs (a 32-byte load
+// each), an odd last one by one 16-byte compare, masked out where the
+// blocks are even (the 16 bytes then the last pair's second half, counted
+// already): the same reads as the SSE2 body, no entry past the region's
+// last whole block of 4.
+//
+// A region's pair counts' two halves added, with the last block's compare
+// (where odd is all ones).
+[[gnu::target("arch=x86-64-v3")]] inline __m128i belowOfFour(__m256i counts, __m256i limit, const std::uint8_t* last,
+                                                            __m128i odd)
+{
+    const __m128i lastBelow =
+        _mm_and_si128(odd, _mm_cmpgt_epi8(_mm256_castsi256_si128(limit), _mm_loadu_si128(reinterpret_cast<const __m128i*>(last))));
+    return _mm_add_epi8(_mm_add_epi8(_mm256_castsi256_si128(counts), _mm256_extracti128_si256(counts, 1)), lastBelow);
+}
+
+[[gnu::target("arch=x86-64-v3")]] std::array<std::uint32_t, 4> fourAlikeVersion(
+    const std::array<const std::uint32_t*, 4>& pixels, const std::array<int, 4>& counts)
+{
+    const int blocks = (counts[0] + 3) / 4;  // 1-64
+    const int pairs = blocks / 2;            // 0-32
+    const __m128i odd = _mm_set1_epi8(static_cast<char>(-(blocks & 1)));
+    const __m128i slots = _mm_set1_epi8(static_cast<char>(4 * blocks));
+    const std::ptrdiff_t last = 16 * static_cast<std::ptrdiff_t>(blocks - 1);
+    std::array<std::uint32_t, 4> needs;
+    for (int j = 0; j < 4; ++j) {
+        const auto n = static_cast<std::uint32_t>(counts[j]);  // >= 1
+        needs[j] = (n - n / 2) * 0x01010101u;
+    }
+    const __m128i need = dwordsOf(needs);
+    const auto *p0 = reinterpret_cast<const std::uint8_t*>(pixels[0]), *p1 = reinterpret_cast<const std::uint8_t*>(pixels[1]),
+               *p2 = reinterpret_cast<const std::uint8_t*>(pixels[2]), *p3 = reinterpret_cast<const std::uint8_t*>(pixels[3]);
+    __m128i m = _mm_setzero_si128(), bit = firstBit();
+    for (int pass = 0; pass < 8; ++pass, bit = nextBit(bit)) {
+        // t ^ 0x80 in each byte: x < t as signed bytes of x = value ^ 0x80.
+        const __m256i limits = _mm256_broadcastsi128_si256(_mm_xor_si128(_mm_or_si128(m, bit), _mm_set1_epi8(-128)));
+        const __m256i l0 = _mm256_shuffle_epi32(limits, 0x00), l1 = _mm256_shuffle_epi32(limits, 0x55),
+                      l2 = _mm256_shuffle_epi32(limits, 0xaa), l3 = _mm256_shuffle_epi32(limits, 0xff);
+        __m256i c0 = _mm256_setzero_si256(), c1 = c0, c2 = c0, c3 = c0;
+        // Pairs pairs - 1 down to 0 by a jump into straight-line code, as
+        // forBlocksDown (0 pairs: none).
+#define STRIA_BELOW(c, l, p, b) \
+    c = _mm256_add_epi8(c, _mm256_cmpgt_epi8(l, _mm256_loadu_si256(reinterpret_cast<const __m256i*>(p + 32 * (b)))))
+#define STRIA_PAIR(b)                   \
+    case b:                             \
+        STRIA_BELOW(c0, l0, p0, b - 1); \
+        STRIA_BELOW(c1, l1, p1, b - 1); \
+        STRIA_BELOW(c2, l2, p2, b - 1); \
+        STRIA_BELOW(c3, l3, p3, b - 1); \
+        [[fallthrough]];
+#define STRIA_PAIRS8(b) \
+    STRIA_PAIR(b + 7) STRIA_PAIR(b + 6) STRIA_PAIR(b + 5) STRIA_PAIR(b + 4) STRIA_PAIR(b + 3) STRIA_PAIR(b + 2) STRIA_PAIR(b + 1) STRIA_PAIR(b)
+        if (pairs > 32) __builtin_unreachable();
+        switch (pairs) {
+            STRIA_PAIR(32)
+            STRIA_PAIRS8(24)
+            STRIA_PAIRS8(16)
+            STRIA_PAIRS8(8)
+            STRIA_PAIR(7)
+            STRIA_PAIR(6)
+            STRIA_PAIR(5)
+            STRIA_PAIR(4)
+            STRIA_PAIR(3)
+            STRIA_PAIR(2)
+            STRIA_PAIR(1)
+        case 0:
+            break;
+        }
+#undef STRIA_PAIRS8
+#undef STRIA_PAIR
+#undef STRIA_BELOW
+        const __m128i below = sumsOfFour(belowOfFour(c0, l0, p0 + last, odd), belowOfFour(c1, l1, p1 + last, odd),
+                                         belowOfFour(c2, l2, p2 + last, odd), belowOfFour(c3, l3, p3 + last, odd));
+        // below holds minus the counts below t (the compares' -1 added).
+        m = stepOfFour(m, bit, _mm_add_epi8(slots, below), need);
+    }
+    return dwords(_mm_and_si128(m, loadBytes(kThreeBytes)));
+}
+
+// The x86-64-v3 version of channelMedians for up to 32767 pixels (larger
+// ones: the SSE2 body), as fourAlikeVersion: 8 pixels per compare, the
+// values below t counted (2 instructions per 8 pixels, where the SSE2 body
+// takes 3 per 4), a region's last block of 4 where its blocks are odd by a
+// 16-byte compare. The pairs' counts in byte lanes over chunks of up to 254
+// pairs (with the last block, at most 255 per lane), summed per byte
+// position in 16 bits; t is reached where at most slots - need are below it
+// (slots = 4 * blocks, the pad entries below every t).
+// pairsBelow: per byte lane, how many of the n (0-254) pairs of blocks from
+// bytes on are below the limit (the loop of 32 pairs per step entered by a
+// jump into its body, as blockCounts).
+[[gnu::target("arch=x86-64-v3")]] inline __m256i pairsBelow(const std::uint8_t* bytes, int n, __m256i limit)
+{
+    __m256i c[4] = {_mm256_setzero_si256(), _mm256_setzero_si256(), _mm256_setzero_si256(), _mm256_setzero_si256()};
+    // The first step takes the n & 31 pairs past whole 32s (step block i at
+    // at + 32 i, entered at i = 32 - (n & 31)), then n >> 5 steps of 32.
+    const int first = n & 31;
+    int left = n >> 5;
+    std::ptrdiff_t at = 32 * static_cast<std::ptrdiff_t>(first - 32);
+#define STRIA_COUNT(i) \
+    c[(i) & 3] = _mm256_sub_epi8(c[(i) & 3], _mm256_cmpgt_epi8(limit, _mm256_loadu_si256(reinterpret_cast<const __m256i*>(bytes + (at + 32 * (i))))))
+#define STRIA_PAIR(i)   \
+    case 32 - (i):      \
+        STRIA_COUNT(i); \
+        [[fallthrough]];
+#define STRIA_PAIRS8(i) \
+    STRIA_PAIR(i) STRIA_PAIR(i + 1) STRIA_PAIR(i + 2) STRIA_PAIR(i + 3) STRIA_PAIR(i + 4) STRIA_PAIR(i + 5) STRIA_PAIR(i + 6) STRIA_PAIR(i + 7)
+    switch (first) {
+    case 0:
+        if (left-- == 0) break;
+        at += 32 * 32;
+        for (;;) {
+            STRIA_COUNT(0);
+            [[fallthrough]];
+            STRIA_PAIRS8(1)
+            STRIA_PAIRS8(9)
+            STRIA_PAIRS8(17)
+            STRIA_PAIR(25)
+            STRIA_PAIR(26)
+            STRIA_PAIR(27)
+            STRIA_PAIR(28)
+            STRIA_PAIR(29)
+            STRIA_PAIR(30)
+        case 1:
+            STRIA_COUNT(31);
+            if (left-- == 0) break;
+            at += 32 * 32;
+        }
+    }
+#undef STRIA_PAIRS8
+#undef STRIA_PAIR
+#undef STRIA_COUNT
+    return _mm256_add_epi8(_mm256_add_epi8(c[0], c[1]), _mm256_add_epi8(c[2], c[3]));
+}
+
+// A byte-lane count's sums per byte position of a pixel, in 16-bit lanes 0-3.
+[[gnu::target("arch=x86-64-v3")]] inline __m128i positionSums(__m256i counts)
+{
+    const __m256i zero = _mm256_setzero_si256();
+    const __m256i words = _mm256_add_epi16(_mm256_unpacklo_epi8(counts, zero), _mm256_unpackhi_epi8(counts, zero));
+    const __m128i sums = _mm_add_epi16(_mm256_castsi256_si128(words), _mm256_extracti128_si256(words, 1));
+    return _mm_add_epi16(sums, _mm_srli_si128(sums, 8));
+}
+
+[[gnu::target("arch=x86-64-v3")]] std::array<std::uint8_t, 3> mediansVersion(const std::uint32_t* pixels, int count)
+{
+    if (count > 32767) return mediansBody(pixels, count);
+    const auto* bytes = reinterpret_cast<const std::uint8_t*>(pixels);
+    const int blocks = (count + 3) / 4;
+    const int pairs = blocks / 2;
+    const __m128i odd = _mm_set1_epi8(static_cast<char>(-(blocks & 1)));
+    const std::uint8_t* last = bytes + 16 * static_cast<std::ptrdiff_t>(blocks - 1);
+    // t reached where below <= slots - need (unsigned: up to 32768).
+    const __m128i most = _mm_set1_epi16(static_cast<short>(4 * blocks - (count - count / 2)));
+    const int firstPairs = std::min(pairs, 254);
+    __m128i m = _mm_setzero_si128(), bit = firstBit();
+    for (int pass = 0; pass < 8; ++pass, bit = nextBit(bit)) {
+        // t ^ 0x80 in each byte (m's dwords alike).
+        const __m128i limit = _mm_xor_si128(_mm_or_si128(m, bit), _mm_set1_epi8(-128));
+        const __m256i limits = _mm256_broadcastsi128_si256(limit);
+        const __m128i lastBelow = _mm_and_si128(odd, _mm_cmpgt_epi8(limit, _mm_loadu_si128(reinterpret_cast<const __m128i*>(last))));
+        __m128i below = positionSums(_mm256_sub_epi8(pairsBelow(bytes, firstPairs, limits), _mm256_zextsi128_si256(lastBelow)));
+        for (int first = 254; first < pairs; first += 254)
+            below = _mm_add_epi16(below, positionSums(pairsBelow(bytes + 32 * static_cast<std::ptrdiff_t>(first),
+                                                                 std::min(pairs - first, 254), limits)));
+        const __m128i reached = _mm_cmpeq_epi16(_mm_min_epu16(below, most), below);
+        m = _mm_or_si128(m, _mm_and_si128(bit, _mm_shuffle_epi32(_mm_packs_epi16(reached, reached), 0)));
+    }
+    const auto v = static_cast<std::uint32_t>(_mm_cvtsi128_si32(m));
+    return {static_cast<std::uint8_t>(v), static_cast<std::uint8_t>(v >> 8), static_cast<std::uint8_t>(v >> 16)};
+}
+#endif
+}  // namespace
+#endif
+
+#if defined(__x86_64__)
+namespace {
+[[gnu::target("default")]] std::array<std::uint8_t, 3> mediansVersion(const std::uint32_t* pixels, int count)
+{
+    return mediansBody(pixels, count);
+}
 }  // namespace
 #endif
 
 std::array<std::uint8_t, 3> channelMedians(const std::uint32_t* pixels, int count)
+{
+#if defined(__x86_64__)
+    return mediansVersion(pixels, count);
+#else
+    return mediansBody(pixels, count);
+#endif
+}
+
+namespace {
+// The SSE2 and NEON body.
+std::array<std::uint8_t, 3> mediansBody(const std::uint32_t* pixels, int count)
 {
 #if defined(__ARM_NEON) || defined(__SSE2__)
     if (count <= 255) {
@@ -429,6 +636,7 @@ std::array<std::uint8_t, 3> channelMedians(const std::uint32_t* pixels, int coun
     return channelMediansReference(pixels, count);
 #endif
 }
+}  // namespace
 
 std::array<std::uint32_t, 4> channelMediansOfFour(const std::array<const std::uint32_t*, 4>& pixels,
                                                   const std::array<int, 4>& counts)
@@ -473,8 +681,30 @@ std::array<std::uint32_t, 4> channelMediansOfFour(const std::array<const std::ui
     return medians;
 }
 
+namespace {
+std::array<std::uint32_t, 4> fourAlikeBody(const std::array<const std::uint32_t*, 4>& pixels, const std::array<int, 4>& counts);
+#if defined(__x86_64__)
+[[gnu::target("default")]] std::array<std::uint32_t, 4> fourAlikeVersion(const std::array<const std::uint32_t*, 4>& pixels,
+                                                                         const std::array<int, 4>& counts)
+{
+    return fourAlikeBody(pixels, counts);
+}
+#endif
+}  // namespace
+
 std::array<std::uint32_t, 4> channelMediansOfFourAlike(const std::array<const std::uint32_t*, 4>& pixels,
                                                        const std::array<int, 4>& counts)
+{
+#if defined(__x86_64__)
+    return fourAlikeVersion(pixels, counts);
+#else
+    return fourAlikeBody(pixels, counts);
+#endif
+}
+
+namespace {
+// The SSE2 and NEON body.
+std::array<std::uint32_t, 4> fourAlikeBody(const std::array<const std::uint32_t*, 4>& pixels, const std::array<int, 4>& counts)
 {
 #if defined(__ARM_NEON) || defined(__SSE2__)
     // As channelMediansOfFour, the four regions' blocks in one walk per pass:
@@ -513,5 +743,7 @@ std::array<std::uint32_t, 4> channelMediansOfFourAlike(const std::array<const st
     return channelMediansOfFour(pixels, counts);
 #endif
 }
+
+}  // namespace
 
 }  // namespace stria::pipeline
