@@ -31,7 +31,9 @@
 // the edge sample windows as one definition per target (simd_edges.cpp: the
 // AVX2 body gathers a channel's 8 samples by vpshufb), and the region copy
 // pass (regions.cpp: 4 pixels per byte shuffle on x86-64-v3; tbl on
-// AArch64). tests/decoder runs the kernel tests again under qemu-x86_64 on
+// AArch64), and the region medians as one definition per
+// target (simd_regions.cpp: the AVX2 bodies take 8 pixels per compare and
+// count the values below t). tests/decoder runs the kernel tests again under qemu-x86_64 on
 // CPUs without AVX-512 and without AVX (the AVX2 and SSE2 versions).
 #if defined(__x86_64__)
 #define STRIA_X86_CLONES __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
@@ -140,9 +142,11 @@ void projectedGradientWindows(const std::uint8_t* row, int width, const std::int
 // bytes (a frame pixel's 3 and one more, each stored as value ^
 // kRegionByteBias), the median of the pixels' values k: the value
 // at index count / 2 of them sorted. channelMedians reads whole
-// blocks of 4 pixels, the last one whole: the entries after the last pixel up
-// to the next multiple of 4 must hold the value 0 in bytes 0-2 (kRegionByteBias stored),
+// blocks of pixels, the last one whole: the kRegionPad entries after the last
+// pixel must hold the value 0 in bytes 0-2 (kRegionByteBias stored),
 // which is below every value the search compares with (and not counted).
+// x86-64: 7, to the next multiple of 8 (the AVX2 versions' blocks of 8
+// pixels); 3 elsewhere (blocks of 4).
 // The bytes' bias: each stored as value ^ kRegionByteBias. 0x80 on x86
 // (SSE2 has only signed byte compares: the bias orders the values as signed
 // bytes), 0 on NEON, whose unsigned compares take the raw bytes (the copy
@@ -151,6 +155,11 @@ void projectedGradientWindows(const std::uint8_t* row, int width, const std::int
 inline constexpr std::uint8_t kRegionByteBias = 0;
 #else
 inline constexpr std::uint8_t kRegionByteBias = 0x80;
+#endif
+#if defined(__x86_64__)
+inline constexpr int kRegionPad = 7;
+#else
+inline constexpr int kRegionPad = 3;
 #endif
 std::array<std::uint8_t, 3> channelMediansReference(const std::uint32_t* pixels, int count);
 std::array<std::uint8_t, 3> channelMedians(const std::uint32_t* pixels, int count);

@@ -148,25 +148,26 @@ TEST(DecoderKernels, EdgeLocationGradientsEqualReferenceOnSimulatorFrame)
 // the 16-bit lanes' search, the 64-block steps of the chunks' loop and the
 // 254 blocks of one chunk), of random bytes, of
 // few distinct values (ties at the median) and of the extremes 0 and 255.
-// Each region's pixels are followed by 3 entries of the value 0 (kRegionByteBias
-// stored), as the kernels require.
+// Each region's pixels are followed by kRegionPad entries of the value 0
+// (kRegionByteBias stored), as the kernels require.
 int regionMediansDiffering(unsigned seed)
 {
     std::mt19937 rng(seed);
-    std::vector<std::uint32_t> pixels(40000 + 3);
+    std::vector<std::uint32_t> pixels(40000 + kRegionPad);
     int differing = 0;
-    std::vector<std::uint32_t> other(3 * (255 + 3));
-    auto pad = [](std::uint32_t* end) { std::fill(end, end + 3, kRegionByteBias * 0x01010101u); };
+    constexpr int stride = 255 + kRegionPad;
+    std::vector<std::uint32_t> other(3 * stride);
+    auto pad = [](std::uint32_t* end) { std::fill(end, end + kRegionPad, kRegionByteBias * 0x01010101u); };
     auto compare = [&](int count) {
         pad(pixels.data() + count);
         differing += channelMedians(pixels.data(), count) != channelMediansReference(pixels.data(), count);
         // The kernel for four regions: this one, then three of 1-255 random
         // pixels in the second buffer.
         const std::array<int, 4> counts{count, 1 + (count * 37) % 255, 1 + count % 16, 255 - count % 255};
-        const std::array<const std::uint32_t*, 4> regions{pixels.data(), other.data(), other.data() + 258,
-                                                          other.data() + 2 * 258};
+        const std::array<const std::uint32_t*, 4> regions{pixels.data(), other.data(), other.data() + stride,
+                                                          other.data() + 2 * stride};
         for (std::uint32_t& p : other) p = rng();
-        for (int j = 1; j < 4; ++j) pad(other.data() + 258 * (j - 1) + counts[j]);
+        for (int j = 1; j < 4; ++j) pad(other.data() + stride * (j - 1) + counts[j]);
         const auto medians = channelMediansOfFour(regions, counts);
         for (int j = 0; j < 4; ++j) {
             const std::array<std::uint8_t, 3> v = channelMediansReference(regions[j], counts[j]);
@@ -181,7 +182,7 @@ int regionMediansDiffering(unsigned seed)
         std::array<int, 4> clamped = alike;
         for (int j = 1; j < 4; ++j) {
             clamped[j] = std::min(alike[j], 255);
-            pad(other.data() + 258 * (j - 1) + clamped[j]);
+            pad(other.data() + stride * (j - 1) + clamped[j]);
         }
         const auto alikeMedians = channelMediansOfFourAlike(regions, clamped);
         for (int j = 0; j < 4; ++j) {
