@@ -496,15 +496,22 @@ private:
         // that way can give a hypothesis at all: across, the next stripe
         // exists; along, null edges are possible.
         const unsigned possible = (stripe - 1 >= 0) | (nullEdges << 1) | ((stripe + 1 < stripeCount) << 2);
-        // That, an edge weak exactly along the stripes, and a neighbour
-        // holding neither the stripe nor the next one (along, next is the
-        // stripe): the conditions of bestHypothesis's two cases as one
-        // expression.
+        // With an edge weak exactly along the stripes: bit dir + 1 + 3 * weak
+        // (across: bits 0 and 2, not weak; along: bit 4, weak).
+        const unsigned possibleWeak = (possible & 5u) | (possible & 2u) << 3;
+        // That, and a neighbour holding neither the stripe nor the next one
+        // (along, next is the stripe): the conditions of bestHypothesis's two
+        // cases as one expression. dir is directionFrom's product in int (no
+        // sign extension of its int8 EdgeDirection), and the weak edge's test
+        // is the mask's (no separate test of dir == 0); the plain form:
+        //   dir = directionFrom(edge, from, to);
+        //   (toStripe != stripe) & (toStripe != stripe + dir) &
+        //   (weak == (dir == 0)) & (possible >> (dir + 1) & 1)
         auto canGiveHypothesis = [&](const EdgeFeature& edge, int to) {
             const int toStripe = stripes_[to];
-            const int dir = static_cast<int>(directionFrom(edge, from, to));
-            const bool weak = edge.weight < weakBelow;
-            return (toStripe != stripe) & (toStripe != stripe + dir) & (weak == (dir == 0)) & (possible >> (dir + 1) & 1);
+            const int dir = (edge.directionPlusOne() - 1) * (2 * (from < to) - 1);
+            const unsigned weak = edge.weight < weakBelow;
+            return (toStripe != stripe) & (toStripe != stripe + dir) & (possibleWeak >> (dir + 1 + 3 * weak) & 1);
         };
         forEachEdgeWhere(from, canGiveHypothesis, [&](int e, int to) {
             const EdgeDirection dir = directionFrom(features_[e], from, to);

@@ -73,6 +73,7 @@ struct EdgeFeature {
     }
     int otherEnd(int from) const { return static_cast<int>(packed & ((1u << kEndBits) - 1)) ^ from; }
     EdgeDirection direction() const { return static_cast<EdgeDirection>(static_cast<int>(packed >> kEndBits & 3) - 1); }
+    int directionPlusOne() const { return static_cast<int>(packed >> kEndBits & 3); }  // 0, 1, 2 (seen from a)
     SymbolCode bestSymbol() const { return static_cast<SymbolCode>(packed >> (kEndBits + 2)); }
 };
 
