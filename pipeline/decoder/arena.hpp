@@ -6,13 +6,16 @@
 // Why: the stages read the labels, the regions, the edges and the order
 // buffer at random (union-find, counting sort, graph hash table, the
 // traversal's records), about 13 MB at 780x580. In 4 KB pages that is ~3 200
-// pages, more than the second-level TLB holds (AMD Zen 2: 2 048 entries,
-// Cortex-A53: 512), so many of those reads also walk the page tables; in
-// 2 MB pages it is 7 pages. Measured on the development VM (2-core EPYC,
-// tests/bench/ab-compare.sh, docs/performance.md): about 3 % of a 780x580
-// decode. The kernel decides: with transparent huge pages off
-// (/sys/kernel/mm/transparent_hugepage/enabled = never) or without them the
-// block is in 4 KB pages and everything works the same, only slower.
+// pages, more than a second-level TLB holds (Cortex-A53: 512 entries), so
+// many of those reads also walk the page tables; in 2 MB pages it is 7.
+// Measured on the development VM (2-core EPYC, tests/bench/ab-compare.sh,
+// docs/performance.md, session 13): no difference on the quiet machine;
+// about 3 % faster in two of three A/Bs while other processes shared the
+// cores (weak evidence). The small TLBs of the boards' cores are the reason
+// it is kept; it has not been measured on a board. The kernel decides: with
+// transparent huge pages off (/sys/kernel/mm/transparent_hugepage/enabled =
+// never) or not built in, the block is in 4 KB pages and everything works
+// the same.
 //
 // Ownership: WorkspaceArena owns the block (DecoderWorkspace::arena); the
 // arrays are ArenaArray views into it, valid while the arena lives.
