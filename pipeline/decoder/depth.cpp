@@ -191,19 +191,6 @@ private:
     const cv::Vec2f* gridRow_ = nullptr;
 };
 
-// The position of a mask word's lowest set bit, for bits != 0: on x86-64 one
-// rep bsf into a 64-bit register, where GCC 12 wraps std::countr_zero's int
-// in an xor that clears the register first (graph.cpp's lowestBit).
-[[gnu::always_inline]] inline std::size_t lowestBit(std::uint64_t bits)
-{
-#if defined(__x86_64__)
-    std::uint64_t at;
-    asm("rep bsf %1, %0" : "=r"(at) : "rm"(bits) : "cc");
-    return at;
-#else
-    return static_cast<unsigned>(std::countr_zero(bits));
-#endif
-}
 
 // Bit i set where lane i of a comparison mask is (all ones, else 0).
 int laneBits(Ints mask)

@@ -66,14 +66,17 @@ namespace {
 // floats (tests/decoder/test_kernels.cpp compares them with those loops);
 // sums over the channels keep the loops' order (maxima of non-NaN floats
 // are the same in any order).
-using Lanes = float __attribute__((vector_size(16)));
-using LaneMask = std::int32_t __attribute__((vector_size(16)));
+// (The lane helpers shared with the traversal's symbol tests come from
+// symbol_error.hpp.)
+using symbol_error::Lanes;
+using symbol_error::LaneMask;
+using symbol_error::absolute;
+using symbol_error::lanesOf;
+using symbol_error::squareRoot;
 
 Lanes lanesOf(const std::array<float, 3>& c) { return Lanes{c[0], c[1], c[2], 0}; }
-Lanes lanesOf(float v) { return Lanes{v, v, v, v}; }
 LaneMask select(LaneMask mask, LaneMask a, LaneMask b) { return (mask & a) | (~mask & b); }
 Lanes select(LaneMask mask, Lanes a, Lanes b) { return (Lanes)select(mask, (LaneMask)a, (LaneMask)b); }
-Lanes absolute(Lanes v) { return (Lanes)((LaneMask)v & 0x7fffffff); }
 float largestOfChannels(Lanes v) { return std::max({v[0], v[1], v[2]}); }
 // a < b ? a : b and a > b ? a : b per lane, which GCC compiles to SSE2's
 // minps and maxps (3 instructions fewer than a select by masks).
@@ -83,17 +86,6 @@ using symbol_error::maximumOf;
 using symbol_error::minimumOf;
 // x where mask, else +0: one and, where a select takes three.
 Lanes where(LaneMask mask, Lanes x) { return (Lanes)(mask & (LaneMask)x); }
-Lanes squareRoot(Lanes v)
-{
-#if defined(__SSE2__)
-    return _mm_sqrt_ps(v);
-#elif defined(__aarch64__)
-    return vsqrtq_f32(v);
-#else
-    for (int i = 0; i < 4; ++i) v[i] = std::sqrt(v[i]);
-    return v;
-#endif
-}
 
 // Per symbol code, what matchError needs of its channels.
 struct SymbolTerms {

@@ -57,23 +57,6 @@ namespace {
 // 64-bit constant is 2-4 instructions on AArch64, a movabs on x86-64;
 // 780x580, x86-64: graph stage 11.10 -> 10.97 M instructions.)
 
-// The position of a mask word's lowest set bit, for bits != 0: the pair
-// loops' column in the word. On x86-64 one rep bsf into a 64-bit register
-// (tzcnt where the CPU has BMI1, bsf before it: the same for a word that
-// is not 0), where GCC 12 wraps std::countr_zero's int in an xor that
-// clears the register first and a sign extension (movslq) after it, two
-// instructions per border pair (graph stage 10.97 -> 10.74 M instructions
-// per 780x580 decode).
-[[gnu::always_inline]] inline std::size_t lowestBit(std::uint64_t bits)
-{
-#if defined(__x86_64__)
-    std::uint64_t at;
-    asm("rep bsf %1, %0" : "=r"(at) : "rm"(bits) : "cc");
-    return at;
-#else
-    return static_cast<unsigned>(std::countr_zero(bits));
-#endif
-}
 
 // A border pair's labels as one word, q's high and p's low (addPair).
 std::uint64_t labelPair(std::int32_t p, std::int32_t q)

@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <array>
 #include <bit>
+#include <cstddef>
 #include <cstdint>
 #include <limits>
 
@@ -53,6 +54,24 @@ template <typename T>
 [[gnu::always_inline]] inline void hide(T& value)
 {
     asm("" : "+r"(value));
+}
+
+// The position of a mask word's lowest set bit, for bits != 0 (the border
+// masks' bit loops in graph.cpp and depth.cpp). On x86-64 one rep bsf into a
+// 64-bit register (tzcnt where the CPU has BMI1, bsf before it: the same for
+// a word that is not 0), where GCC 12 wraps std::countr_zero's int in an xor
+// that clears the register first and a sign extension (movslq) after it, two
+// instructions per border pair (graph stage 10.97 -> 10.74 M instructions per
+// 780x580 decode).
+[[gnu::always_inline]] inline std::size_t lowestBit(std::uint64_t bits)
+{
+#if defined(__x86_64__)
+    std::uint64_t at;
+    asm("rep bsf %1, %0" : "=r"(at) : "rm"(bits) : "cc");
+    return at;
+#else
+    return static_cast<unsigned>(std::countr_zero(bits));
+#endif
 }
 
 #if defined(__aarch64__)

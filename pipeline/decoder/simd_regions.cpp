@@ -12,6 +12,32 @@
 #include <immintrin.h>
 #endif
 
+// Duff's device of blockCounts and blocksBelow: a loop of 64 blocks per step,
+// entered by a jump into its body so that the first step takes the blocks
+// past whole 64s: its block i (of 0-63) is counted by STRIA_COUNT(i), which
+// the user defines (reading at + stride * i), entered at i = 64 - first
+// (first: 1-64, 64 as 0, so the cases cover every value of first & 63);
+// `at` moves on by 64 blocks per step, for `steps` steps.
+#define STRIA_DUFF_BLOCK(i) \
+    case (64 - (i)) & 63:   \
+        STRIA_COUNT(i);     \
+        [[fallthrough]];
+#define STRIA_DUFF_BLOCKS8(i)                                                                                        \
+    STRIA_DUFF_BLOCK(i) STRIA_DUFF_BLOCK(i + 1) STRIA_DUFF_BLOCK(i + 2) STRIA_DUFF_BLOCK(i + 3) STRIA_DUFF_BLOCK(i + 4) \
+        STRIA_DUFF_BLOCK(i + 5) STRIA_DUFF_BLOCK(i + 6) STRIA_DUFF_BLOCK(i + 7)
+#define STRIA_BLOCKS_OF_64(first, steps, at, stride)                                                                    \
+    switch (static_cast<unsigned>(first) & 63) {                                                                        \
+        do {                                                                                                            \
+            STRIA_DUFF_BLOCKS8(0) STRIA_DUFF_BLOCKS8(8) STRIA_DUFF_BLOCKS8(16) STRIA_DUFF_BLOCKS8(24)                   \
+            STRIA_DUFF_BLOCKS8(32) STRIA_DUFF_BLOCKS8(40) STRIA_DUFF_BLOCKS8(48) STRIA_DUFF_BLOCK(56)                   \
+            STRIA_DUFF_BLOCK(57) STRIA_DUFF_BLOCK(58) STRIA_DUFF_BLOCK(59) STRIA_DUFF_BLOCK(60) STRIA_DUFF_BLOCK(61)     \
+            STRIA_DUFF_BLOCK(62)                                                                                        \
+        case 1:                                                                                                         \
+            STRIA_COUNT(63);                                                                                            \
+            at += (stride) * 64;                                                                                        \
+        } while (--(steps) > 0);                                                                                        \
+    }
+
 namespace stria::pipeline {
 
 std::array<std::uint8_t, 3> channelMediansReference(const std::uint32_t* pixels, int count)
@@ -329,31 +355,7 @@ inline ByteSearch startSearch(const std::uint32_t* pixels, int count)
     // blocks 64 - first .. 63 are the region's first).
     std::ptrdiff_t at = 16 * static_cast<std::ptrdiff_t>(first - 64);
 #define STRIA_COUNT(i) c[(i) & 3] = sub(c[(i) & 3], atLeast(bytes + (at + 16 * (i)), limit))
-#define STRIA_BLOCK(i) \
-    case (64 - (i)) & 63: \
-        STRIA_COUNT(i); \
-        [[fallthrough]];
-#define STRIA_BLOCKS7(i) \
-    STRIA_BLOCK(i) STRIA_BLOCK(i + 1) STRIA_BLOCK(i + 2) STRIA_BLOCK(i + 3) STRIA_BLOCK(i + 4) STRIA_BLOCK(i + 5) STRIA_BLOCK(i + 6)
-#define STRIA_BLOCKS8(i) STRIA_BLOCKS7(i) STRIA_BLOCK(i + 7)
-    switch (static_cast<unsigned>(first) & 63) {
-        do {
-            STRIA_BLOCKS8(0)
-            STRIA_BLOCKS8(8)
-            STRIA_BLOCKS8(16)
-            STRIA_BLOCKS8(24)
-            STRIA_BLOCKS8(32)
-            STRIA_BLOCKS8(40)
-            STRIA_BLOCKS8(48)
-            STRIA_BLOCKS7(56)
-        case 1:
-            STRIA_COUNT(63);
-            at += 16 * 64;
-        } while (--steps > 0);
-    }
-#undef STRIA_BLOCKS8
-#undef STRIA_BLOCKS7
-#undef STRIA_BLOCK
+    STRIA_BLOCKS_OF_64(first, steps, at, 16)
 #undef STRIA_COUNT
     return add(add(c[0], c[1]), add(c[2], c[3]));
 }
@@ -470,31 +472,7 @@ inline std::array<int, 3> countAtLeast(const std::uint8_t* bytes, int blocks, co
     std::ptrdiff_t at = 32 * static_cast<std::ptrdiff_t>(first - 64);
 #define STRIA_COUNT(i) \
     c[(i) & 3] = _mm256_sub_epi8(c[(i) & 3], _mm256_cmpgt_epi8(limit, _mm256_loadu_si256(reinterpret_cast<const __m256i*>(bytes + (at + 32 * (i))))))
-#define STRIA_BLOCK(i)    \
-    case (64 - (i)) & 63: \
-        STRIA_COUNT(i);   \
-        [[fallthrough]];
-#define STRIA_BLOCKS7(i) \
-    STRIA_BLOCK(i) STRIA_BLOCK(i + 1) STRIA_BLOCK(i + 2) STRIA_BLOCK(i + 3) STRIA_BLOCK(i + 4) STRIA_BLOCK(i + 5) STRIA_BLOCK(i + 6)
-#define STRIA_BLOCKS8(i) STRIA_BLOCKS7(i) STRIA_BLOCK(i + 7)
-    switch (static_cast<unsigned>(first) & 63) {
-        do {
-            STRIA_BLOCKS8(0)
-            STRIA_BLOCKS8(8)
-            STRIA_BLOCKS8(16)
-            STRIA_BLOCKS8(24)
-            STRIA_BLOCKS8(32)
-            STRIA_BLOCKS8(40)
-            STRIA_BLOCKS8(48)
-            STRIA_BLOCKS7(56)
-        case 1:
-            STRIA_COUNT(63);
-            at += 32 * 64;
-        } while (--steps > 0);
-    }
-#undef STRIA_BLOCKS8
-#undef STRIA_BLOCKS7
-#undef STRIA_BLOCK
+    STRIA_BLOCKS_OF_64(first, steps, at, 32)
 #undef STRIA_COUNT
     return _mm256_add_epi8(_mm256_add_epi8(c[0], c[1]), _mm256_add_epi8(c[2], c[3]));
 }
@@ -738,3 +716,7 @@ std::array<std::uint32_t, 4> fourAlikeBody(const std::array<const std::uint32_t*
 }  // namespace
 
 }  // namespace stria::pipeline
+
+#undef STRIA_BLOCKS_OF_64
+#undef STRIA_DUFF_BLOCKS8
+#undef STRIA_DUFF_BLOCK
