@@ -125,7 +125,7 @@ Result<std::unique_ptr<Scanner>> Scanner::create(const BoardConfig& board, Devic
             "%.1f MB%s; results in %s",
             board.name.c_str(), camera.backendName(), config.width, config.height, config.exposureUs,
             config.analogueGain, board.settleMs, static_cast<double>(s.decoder_->workspaceBytes()) / 1e6,
-            s.decoder_->workspaceHugePagesAdvised() ? " (huge pages)" : " (4 KB pages: no transparent huge pages)",
+            s.decoder_->workspaceHugePagesAdvised() ? " (huge pages)" : " (4 KB pages)",
             s.options_.writeOutputs ? s.options_.outDir.c_str() : "(not saved)");
     return scanner;
 }

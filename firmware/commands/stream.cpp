@@ -158,7 +158,7 @@ int run(std::span<const std::string> argv)
     logInfo("stria: board '%s' streaming: camera %s %dx%d%s, %d frame slots; decoder workspace %.1f MB%s",
             board->name.c_str(), camera->backendName(), config.width, config.height, replayed.c_str(), options.slots,
             static_cast<double>((*decoder)->workspaceBytes()) / 1e6,
-            (*decoder)->workspaceHugePagesAdvised() ? " (huge pages)" : " (4 KB pages: no transparent huge pages)");
+            (*decoder)->workspaceHugePagesAdvised() ? " (huge pages)" : " (4 KB pages)");
 
     const StopSignals signals(**streamer);
     const StreamSummary summary = (*streamer)->run();
