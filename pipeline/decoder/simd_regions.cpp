@@ -38,6 +38,31 @@
         } while (--(steps) > 0);                                                                                        \
     }
 
+// The count-down Duff's device of forBlocksDown (64 blocks) and the AVX2
+// four-alike kernel (32 blocks): STRIA_STEP(b), which the user defines, for
+// b = blocks - 1 down to 0 (1 <= blocks <= n), by a jump into straight-line
+// code. The switch is on blocks & (n - 1) (n as 0): its n cases cover every
+// value, so GCC's jump has no bounds check.
+#define STRIA_DOWN_BLOCK(b, n)   \
+    case (b) & ((n) - 1):        \
+        STRIA_STEP((b) - 1);     \
+        [[fallthrough]];
+#define STRIA_DOWN_BLOCKS8(b, n)                                                                                      \
+    STRIA_DOWN_BLOCK(b, n) STRIA_DOWN_BLOCK((b) - 1, n) STRIA_DOWN_BLOCK((b) - 2, n) STRIA_DOWN_BLOCK((b) - 3, n)     \
+        STRIA_DOWN_BLOCK((b) - 4, n) STRIA_DOWN_BLOCK((b) - 5, n) STRIA_DOWN_BLOCK((b) - 6, n) STRIA_DOWN_BLOCK((b) - 7, n)
+#define STRIA_DOWN_LAST8(n)                                                                                         \
+    STRIA_DOWN_BLOCK(8, n) STRIA_DOWN_BLOCK(7, n) STRIA_DOWN_BLOCK(6, n) STRIA_DOWN_BLOCK(5, n) STRIA_DOWN_BLOCK(4, n) \
+        STRIA_DOWN_BLOCK(3, n) STRIA_DOWN_BLOCK(2, n) case 1: STRIA_STEP(0);
+#define STRIA_BLOCKS_DOWN_32(blocks)                                                                                    \
+    switch (static_cast<unsigned>(blocks) & 31) {                                                                      \
+        STRIA_DOWN_BLOCKS8(32, 32) STRIA_DOWN_BLOCKS8(24, 32) STRIA_DOWN_BLOCKS8(16, 32) STRIA_DOWN_LAST8(32)          \
+    }
+#define STRIA_BLOCKS_DOWN_64(blocks)                                                                                    \
+    switch (static_cast<unsigned>(blocks) & 63) {                                                                      \
+        STRIA_DOWN_BLOCKS8(64, 64) STRIA_DOWN_BLOCKS8(56, 64) STRIA_DOWN_BLOCKS8(48, 64) STRIA_DOWN_BLOCKS8(40, 64)    \
+        STRIA_DOWN_BLOCKS8(32, 64) STRIA_DOWN_BLOCKS8(24, 64) STRIA_DOWN_BLOCKS8(16, 64) STRIA_DOWN_LAST8(64)          \
+    }
+
 namespace stria::pipeline {
 
 std::array<std::uint8_t, 3> channelMediansReference(const std::uint32_t* pixels, int count)
@@ -85,42 +110,9 @@ alignas(16) constexpr std::uint8_t kThreeBytes[16] = {255, 255, 255, 0, 255, 255
 template <class Step>
 [[gnu::always_inline]] inline void forBlocksDown(int blocks, Step step)
 {
-#define STRIA_BLOCK(b) \
-    case b:            \
-        step(b - 1);   \
-        [[fallthrough]];
-#define STRIA_BLOCKS8(b) \
-    STRIA_BLOCK(b + 7)   \
-    STRIA_BLOCK(b + 6) STRIA_BLOCK(b + 5) STRIA_BLOCK(b + 4) STRIA_BLOCK(b + 3) STRIA_BLOCK(b + 2) STRIA_BLOCK(b + 1) STRIA_BLOCK(b)
-    switch (static_cast<unsigned>(blocks) & 63) {
-    case 0:  // 64
-        step(63);
-        [[fallthrough]];
-        STRIA_BLOCK(63)
-        STRIA_BLOCK(62)
-        STRIA_BLOCK(61)
-        STRIA_BLOCK(60)
-        STRIA_BLOCK(59)
-        STRIA_BLOCK(58)
-        STRIA_BLOCK(57)
-        STRIA_BLOCKS8(49)
-        STRIA_BLOCKS8(41)
-        STRIA_BLOCKS8(33)
-        STRIA_BLOCKS8(25)
-        STRIA_BLOCKS8(17)
-        STRIA_BLOCKS8(9)
-        STRIA_BLOCK(8)
-        STRIA_BLOCK(7)
-        STRIA_BLOCK(6)
-        STRIA_BLOCK(5)
-        STRIA_BLOCK(4)
-        STRIA_BLOCK(3)
-        STRIA_BLOCK(2)
-    case 1:
-        step(0);
-    }
-#undef STRIA_BLOCKS8
-#undef STRIA_BLOCK
+#define STRIA_STEP(b) step(b)
+    STRIA_BLOCKS_DOWN_64(blocks)
+#undef STRIA_STEP
 }
 
 #if defined(__ARM_NEON)
@@ -409,37 +401,16 @@ inline std::array<int, 3> countAtLeast(const std::uint8_t* bytes, int blocks, co
                       l2 = _mm256_shuffle_epi32(limits, 0xaa), l3 = _mm256_shuffle_epi32(limits, 0xff);
         __m256i c0 = _mm256_setzero_si256(), c1 = c0, c2 = c0, c3 = c0;
         // Blocks blocks - 1 down to 0 by a jump into straight-line code, as
-        // forBlocksDown (the switch on blocks & 31, 32 as 0: no bounds check).
+        // forBlocksDown, over 32 blocks (STRIA_BLOCKS_DOWN_32).
 #define STRIA_BELOW(c, l, p, b) \
     c = _mm256_add_epi8(c, _mm256_cmpgt_epi8(l, _mm256_loadu_si256(reinterpret_cast<const __m256i*>(p + 32 * (b)))))
-#define STRIA_BLOCK(b)                  \
-    case (b) & 31:                      \
-        STRIA_BELOW(c0, l0, p0, b - 1); \
-        STRIA_BELOW(c1, l1, p1, b - 1); \
-        STRIA_BELOW(c2, l2, p2, b - 1); \
-        STRIA_BELOW(c3, l3, p3, b - 1); \
-        [[fallthrough]];
-#define STRIA_BLOCKS8(b) \
-    STRIA_BLOCK(b + 7) STRIA_BLOCK(b + 6) STRIA_BLOCK(b + 5) STRIA_BLOCK(b + 4) STRIA_BLOCK(b + 3) STRIA_BLOCK(b + 2) STRIA_BLOCK(b + 1) STRIA_BLOCK(b)
-        switch (static_cast<unsigned>(blocks) & 31) {
-            STRIA_BLOCKS8(25)
-            STRIA_BLOCKS8(17)
-            STRIA_BLOCKS8(9)
-            STRIA_BLOCK(8)
-            STRIA_BLOCK(7)
-            STRIA_BLOCK(6)
-            STRIA_BLOCK(5)
-            STRIA_BLOCK(4)
-            STRIA_BLOCK(3)
-            STRIA_BLOCK(2)
-        case 1:
-            STRIA_BELOW(c0, l0, p0, 0);
-            STRIA_BELOW(c1, l1, p1, 0);
-            STRIA_BELOW(c2, l2, p2, 0);
-            STRIA_BELOW(c3, l3, p3, 0);
-        }
-#undef STRIA_BLOCKS8
-#undef STRIA_BLOCK
+#define STRIA_STEP(b)              \
+    STRIA_BELOW(c0, l0, p0, b); \
+    STRIA_BELOW(c1, l1, p1, b); \
+    STRIA_BELOW(c2, l2, p2, b); \
+    STRIA_BELOW(c3, l3, p3, b)
+        STRIA_BLOCKS_DOWN_32(blocks)
+#undef STRIA_STEP
 #undef STRIA_BELOW
         // Minus the counts below t (the compares' -1 added), plus the slots.
         const __m256i below = sumsOfFour256(c0, c1, c2, c3);
@@ -718,5 +689,10 @@ std::array<std::uint32_t, 4> fourAlikeBody(const std::array<const std::uint32_t*
 }  // namespace stria::pipeline
 
 #undef STRIA_BLOCKS_OF_64
+#undef STRIA_BLOCKS_DOWN_64
+#undef STRIA_BLOCKS_DOWN_32
+#undef STRIA_DOWN_LAST8
+#undef STRIA_DOWN_BLOCKS8
+#undef STRIA_DOWN_BLOCK
 #undef STRIA_DUFF_BLOCKS8
 #undef STRIA_DUFF_BLOCK
