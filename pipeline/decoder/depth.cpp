@@ -139,11 +139,32 @@ public:
         Doubles gx = exactInverse_ ? u * inverseStep_ : u / gridStep_;
         gx = gx < zero ? zero : gx;  // std::max(gx, 0.0)
         gx = last < gx ? last : gx;  // std::min(gx, last)
+#if defined(__aarch64__)
+        // arm64: both lanes converted in one fcvtzs and back in one scvtf, in
+        // 64-bit lanes (GCC converted the Pair lane by lane in scalar
+        // registers, 6 instructions); gx >= 0 and below the grid's width:
+        // the same integers (truncated) and the same fx.
+        const int64x2_t x0 = vcvtq_s64_f64(gx);
+        const Doubles fx = gx - Doubles(vcvtq_f64_s64(x0));
+        // The cells' byte offsets by one vector shift (a q load takes no
+        // index scaled by 8: GCC shifted and added per lane, 6 instructions).
+        static_assert(sizeof(cv::Vec2f) == 8);
+        const int64x2_t offset = vshlq_n_s64(x0, 3);
+        const auto* top0 = reinterpret_cast<const char*>(gridRow_);
+        const char* bottom0 = top0 + static_cast<std::ptrdiff_t>(gridWidth_) * sizeof(cv::Vec2f);
+        const auto cell = [](const char* base, std::int64_t at) {
+            return reinterpret_cast<const cv::Vec2f*>(base + at);
+        };
+        Doubles top[4], bottom[4];
+        cellCorners(cell(top0, offset[0]), cell(top0, offset[1]), top);
+        cellCorners(cell(bottom0, offset[0]), cell(bottom0, offset[1]), bottom);
+#else
         const Pair x0 = __builtin_convertvector(gx, Pair);
         const Doubles fx = gx - __builtin_convertvector(x0, Doubles);
         Doubles top[4], bottom[4];
         cellCorners(gridRow_ + x0[0], gridRow_ + x0[1], top);
         cellCorners(gridRow_ + x0[0] + gridWidth_, gridRow_ + x0[1] + gridWidth_, bottom);
+#endif
         const Doubles topX = top[0] * (1 - fx) + top[2] * fx;
         const Doubles topY = top[1] * (1 - fx) + top[3] * fx;
         const Doubles bottomX = bottom[0] * (1 - fx) + bottom[2] * fx;
@@ -234,9 +255,20 @@ int laneBits(Ints mask)
         // intersectRay's dot product starts from s = 0: (0 + a) + b
         // differs from a + b only in a zero's sign, when the sum
         // is zero, which is rejected either way; the z term is n[2] * 1.
+#if defined(__aarch64__)
+        // arm64: the two planes' 4 fields in lanes by two structure loads
+        // (ld4r of p0's to both lanes, ld4 of p1's to lane 1), where GCC
+        // inserted the 8 doubles one by one (14 instructions). The same
+        // values, so the same arithmetic as below (-p.d as the negated lanes).
+        static_assert(sizeof(Plane) == 4 * sizeof(double) && offsetof(Plane, d) == 3 * sizeof(double));
+        const float64x2x4_t plane = vld4q_lane_f64(&p1.normal[0], vld4q_dup_f64(&p0.normal[0]), 1);
+        const Doubles denom = Doubles(plane.val[0]) * xn + Doubles(plane.val[1]) * yn + Doubles(plane.val[2]);
+        const Doubles t = -Doubles(plane.val[3]) / denom;
+#else
         const Doubles denom = Doubles{p0.normal[0], p1.normal[0]} * xn +
                               Doubles{p0.normal[1], p1.normal[1]} * yn + Doubles{p0.normal[2], p1.normal[2]};
         const Doubles t = Doubles{-p0.d, -p1.d} / denom;
+#endif
         // Not parallel (|denom| >= 1e-12) and in front of the camera:
         // then t's bits (t > 0: not all zero), else +0's (all
         // zero). GCC 12 stores a comparison mask as such lane by
@@ -244,7 +276,13 @@ int laneBits(Ints mask)
         // t is one andpd. (|denom| >= 1e-12 as two tests, not as
         // ~(denom < 1e-12 & denom > -1e-12): they differ only for
         // a NaN denom, whose t is NaN and fails t > 0.)
+#if defined(__aarch64__)
+        // arm64: |denom| >= 1e-12 as vcageq (GCC: fabs, fcmge; 2 instructions
+        // where the two compares and the or took 3), also false for a NaN.
+        const Doubles valid = (t > Doubles{}) & Longs(vcageq_f64(denom, vdupq_n_f64(1e-12))) ? t : Doubles{};
+#else
         const Doubles valid = (t > Doubles{}) & ((denom >= 1e-12) | (denom <= -1e-12)) ? t : Doubles{};
+#endif
         // Only edges located in step 4 (a mask of t's bits: GCC
         // scalarised a mask of the comparisons' masks).
         Longs located;

@@ -165,7 +165,8 @@ void projectedGradientWindows(const std::uint8_t* row, int width, const std::int
 // pixel must hold the value 0 in bytes 0-2 (kRegionByteBias stored),
 // which is below every value the search compares with (and not counted).
 // x86-64: 7, to the next multiple of 8 (the AVX2 versions' blocks of 8
-// pixels); 3 elsewhere (blocks of 4).
+// pixels); arm64 the same (channelMediansOfFourAlike's blocks of 8, loaded
+// by ldp); 3 elsewhere (blocks of 4).
 // The bytes' bias: each stored as value ^ kRegionByteBias. 0x80 on x86
 // (SSE2 has only signed byte compares: the bias orders the values as signed
 // bytes), 0 on NEON, whose unsigned compares take the raw bytes (the copy
@@ -175,7 +176,7 @@ inline constexpr std::uint8_t kRegionByteBias = 0;
 #else
 inline constexpr std::uint8_t kRegionByteBias = 0x80;
 #endif
-#if defined(__x86_64__)
+#if defined(__x86_64__) || defined(__aarch64__)
 inline constexpr int kRegionPad = 7;
 #else
 inline constexpr int kRegionPad = 3;

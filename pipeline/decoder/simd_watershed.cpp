@@ -524,19 +524,88 @@ constexpr uint32x4_t kLaneBytes = {0x03020100, 0x07060504, 0x0b0a0908, 0x0f0e0d0
                                            vreinterpretq_u8_u32(source)));
 }
 
+// 8 labels per step, as two blocks of 4 whose copy sources (copyLeft's and
+// copyRight's prefix max, 5 instructions per block) come from a table
+// indexed by the block's 4 mask bits instead: the 8 codes' masks by one byte
+// compare, and with the bit weights and addv (3 instructions per 8 pixels),
+// each half's 4 bits by one and or shift, its entry by one load. A table of
+// 8-bit masks with a 2-register tbx per half took more: GCC copied the two
+// labels registers into two consecutive pairs, one per tbx.
+// 27 instructions per 8 pixels in the left sweep and 23 in the right one,
+// where two blocks of 4 took 36 and 32 (watershed per 780x580 decode 8.51 ->
+// 7.57 M instructions). The tables: 512 bytes.
+// (Scalar reference: the second loop of sweepRowUpLeftReference, the third
+// of sweepRowReference; copyLeft and copyRight above, the same for a block of
+// 4 alone, do the block left over when the row does not divide by 8.)
+
+// Entry m, lane i: bytes 4 j + k, j the largest j <= i whose bit in m is
+// clear (right: the smallest j >= i); 0xff where there is none. (Two arrays:
+// each entry's address in the loops one and or shift of the bits from its
+// array's base.)
+using CopyTable = std::array<std::array<std::uint8_t, 16>, 16>;
+
+consteval CopyTable copyTable(bool right)
+{
+    CopyTable t{};
+    for (int mask = 0; mask < 16; ++mask)
+        for (int i = 0; i < 4; ++i) {
+            int source = -1;
+            for (int j = i; j >= 0 && j < 4 && source < 0; j += right ? 1 : -1)
+                if ((mask >> j & 1) == 0) source = j;
+            for (int k = 0; k < 4; ++k)
+                t[mask][4 * i + k] = static_cast<std::uint8_t>(source < 0 ? 0xff : 4 * source + k);
+        }
+    return t;
+}
+
+alignas(64) constexpr CopyTable kCopyLeft = copyTable(false);
+alignas(64) constexpr CopyTable kCopyRight = copyTable(true);
+
+// The 8 codes at c with bits kPlateauArrow and kMinimumArrow cleared.
+[[gnu::always_inline]] inline uint8x8_t maskedCodes8(const std::uint8_t* c)
+{
+    return vand_u8(vld1_u8(c), vdup_n_u8(kArrowBits));
+}
+
+// Bit i set where code i is the direction.
+[[gnu::always_inline]] inline unsigned arrowBits8(uint8x8_t codes, std::uint8_t direction)
+{
+    const uint8x8_t weights = vcreate_u8(0x8040201008040201ull);
+    return vaddv_u8(vand_u8(vceq_u8(codes, vdup_n_u8(direction)), weights));
+}
+
+// A block's labels v with each lane's from its source in the table entry,
+// the carry's where that is 0xff.
+[[gnu::always_inline]] inline int32x4_t copyFromTable(const std::uint8_t* entry, int32x4_t v, int32x4_t carry)
+{
+    return vreinterpretq_s32_u8(vqtbx1q_u8(vreinterpretq_u8_s32(carry), vreinterpretq_u8_s32(v), vld1q_u8(entry)));
+}
+
 void upLeftNeon(const std::uint8_t* code, const std::int32_t* above, std::int32_t* row, int width)
 {
-    const int blocks = width & ~3;
+    const int blocks8 = width & ~7, blocks = width & ~3;
     int32x4_t carry = vdupq_n_s32(kUnresolved);
     // (Pointers: post-indexed loads and stores, 2 instructions of loop per block.)
     const std::uint8_t* c = code;
     const std::int32_t* a = above;
-    for (std::int32_t* r = row; r != row + blocks; c += 4, a += 4, r += 4) {
-        const uint32x4_t codes = maskedCodes(c);
-        const int32x4_t v = vbslq_s32(arrowsMask(codes, kDescentUp), vld1q_s32(a), vld1q_s32(r));
-        const int32x4_t stored = copyLeft(v, arrowsMask(codes, kDescentLeft), carry);
-        vst1q_s32(r, stored);
-        carry = vdupq_laneq_s32(stored, 3);
+    for (std::int32_t* r = row; r != row + blocks8; c += 8, a += 8, r += 8) {
+        const uint8x8_t codes = maskedCodes8(c);
+        // The up lanes' masks: the byte compare widened to 32 bits.
+        const int16x8_t up = vmovl_s8(vreinterpret_s8_u8(vceq_u8(codes, vdup_n_u8(kDescentUp))));
+        int32x4_t lo = vbslq_s32(vreinterpretq_u32_s32(vmovl_s16(vget_low_s16(up))), vld1q_s32(a), vld1q_s32(r));
+        int32x4_t hi = vbslq_s32(vreinterpretq_u32_s32(vmovl_high_s16(up)), vld1q_s32(a + 4), vld1q_s32(r + 4));
+        const unsigned bits = arrowBits8(codes, kDescentLeft);
+        lo = copyFromTable(kCopyLeft[bits & 15].data(), lo, carry);
+        hi = copyFromTable(kCopyLeft[bits >> 4].data(), hi, vdupq_laneq_s32(lo, 3));
+        vst1q_s32(r, lo);
+        vst1q_s32(r + 4, hi);
+        carry = vdupq_laneq_s32(hi, 3);
+    }
+    if (blocks > blocks8) {
+        const uint32x4_t codes = maskedCodes(code + blocks8);
+        const int32x4_t v =
+            vbslq_s32(arrowsMask(codes, kDescentUp), vld1q_s32(above + blocks8), vld1q_s32(row + blocks8));
+        vst1q_s32(row + blocks8, copyLeft(v, arrowsMask(codes, kDescentLeft), carry));
     }
     std::int32_t previous = blocks > 0 ? row[blocks - 1] : kUnresolved;
     for (int x = blocks; x < width; ++x) {
@@ -565,10 +634,21 @@ void sweepNeon(const std::uint8_t* code, const std::int32_t* above, std::int32_t
         next = row[x];
     }
     int32x4_t carry = vdupq_n_s32(next);
-    for (int x = blocks - 4; x >= 0; x -= 4) {
-        const int32x4_t stored = copyRight(vld1q_s32(row + x), arrowsMask(maskedCodes(code + x), kDescentRight), carry);
-        vst1q_s32(row + x, stored);
+    const int blocks8 = width & ~7;
+    if (blocks > blocks8) {
+        const int32x4_t stored =
+            copyRight(vld1q_s32(row + blocks8), arrowsMask(maskedCodes(code + blocks8), kDescentRight), carry);
+        vst1q_s32(row + blocks8, stored);
         carry = vdupq_laneq_s32(stored, 0);
+    }
+    for (int x = blocks8 - 8; x >= 0; x -= 8) {
+        int32x4_t hi = vld1q_s32(row + x + 4), lo = vld1q_s32(row + x);
+        const unsigned bits = arrowBits8(maskedCodes8(code + x), kDescentRight);
+        hi = copyFromTable(kCopyRight[bits >> 4].data(), hi, carry);
+        lo = copyFromTable(kCopyRight[bits & 15].data(), lo, vdupq_laneq_s32(hi, 0));
+        vst1q_s32(row + x, lo);
+        vst1q_s32(row + x + 4, hi);
+        carry = vdupq_laneq_s32(lo, 0);
     }
     // The unresolved bits (negative labels), 64 per word, then 16, then 1.
     int x = 0;
