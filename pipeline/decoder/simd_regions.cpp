@@ -81,6 +81,19 @@ std::array<std::uint8_t, 3> channelMediansReference(const std::uint32_t* pixels,
 
 namespace {
 std::array<std::uint8_t, 3> mediansBody(const std::uint32_t* pixels, int count);
+
+// What four regions' median searches need in each byte of their dword: at
+// most count / 2 values below t, so at least count - count / 2 from t on.
+[[maybe_unused]] inline std::array<std::uint32_t, 4> needsOfFour(const std::array<int, 4>& counts)
+{
+    std::array<std::uint32_t, 4> needs;
+    for (int j = 0; j < 4; ++j) {
+        const auto n = static_cast<std::uint32_t>(counts[j]);  // >= 1
+        needs[j] = (n - n / 2) * 0x01010101u;
+    }
+    return needs;
+}
+
 }  // namespace
 
 #if defined(__ARM_NEON) || defined(__SSE2__)
@@ -385,12 +398,7 @@ inline std::array<int, 3> countAtLeast(const std::uint8_t* bytes, int blocks, co
 {
     const int blocks = (counts[0] + 7) / 8;  // 1-32
     const __m128i slots = _mm_set1_epi8(static_cast<char>(8 * blocks));
-    std::array<std::uint32_t, 4> needs;
-    for (int j = 0; j < 4; ++j) {
-        const auto n = static_cast<std::uint32_t>(counts[j]);  // >= 1
-        needs[j] = (n - n / 2) * 0x01010101u;
-    }
-    const __m128i need = dwordsOf(needs);
+    const __m128i need = dwordsOf(needsOfFour(counts));
     const auto *p0 = reinterpret_cast<const std::uint8_t*>(pixels[0]), *p1 = reinterpret_cast<const std::uint8_t*>(pixels[1]),
                *p2 = reinterpret_cast<const std::uint8_t*>(pixels[2]), *p3 = reinterpret_cast<const std::uint8_t*>(pixels[3]);
     __m128i m = _mm_setzero_si128(), bit = firstBit();
@@ -592,14 +600,8 @@ std::array<std::uint32_t, 4> channelMediansOfFour(const std::array<const std::ui
         // medians of four 3.49 -> 3.08 M instructions per decode, 2.99 with
         // the unsigned divisions of the set-up).
         std::array<ByteSearch, 4> searches;
-        std::array<std::uint32_t, 4> needs;
-        for (int j = 0; j < 4; ++j) {
-            searches[j] = startSearch(pixels[j], counts[j]);
-            // At most count / 2 below t: at least count - count / 2 from t on.
-            const auto n = static_cast<std::uint32_t>(counts[j]);  // >= 1
-            needs[j] = (n - n / 2) * 0x01010101u;
-        }
-        const Bytes need = dwordsOf(needs);
+        for (int j = 0; j < 4; ++j) searches[j] = startSearch(pixels[j], counts[j]);
+        const Bytes need = dwordsOf(needsOfFour(counts));
         Bytes m = zeroBytes(), bit = firstBit();
         for (int pass = 0; pass < 8; ++pass, bit = nextBit(bit)) {
             const Bytes limits = limitsOf(m, bit);
@@ -653,12 +655,7 @@ std::array<std::uint32_t, 4> fourAlikeBody(const std::array<const std::uint32_t*
     // 8 pixels where two blocks of 4 took 6. As below otherwise; the
     // counts per byte lane are the same sums (modulo 256, at most 255).
     const int pairs = (counts[0] + 7) / 8;  // 1-32
-    std::array<std::uint32_t, 4> needs;
-    for (int j = 0; j < 4; ++j) {
-        const auto n = static_cast<std::uint32_t>(counts[j]);  // >= 1
-        needs[j] = (n - n / 2) * 0x01010101u;
-    }
-    const Bytes need = dwordsOf(needs);
+    const Bytes need = dwordsOf(needsOfFour(counts));
     const auto *p0 = reinterpret_cast<const std::uint8_t*>(pixels[0]), *p1 = reinterpret_cast<const std::uint8_t*>(pixels[1]),
                *p2 = reinterpret_cast<const std::uint8_t*>(pixels[2]), *p3 = reinterpret_cast<const std::uint8_t*>(pixels[3]);
     Bytes m = zeroBytes(), bit = firstBit();
@@ -668,36 +665,15 @@ std::array<std::uint32_t, 4> fourAlikeBody(const std::array<const std::uint32_t*
                     l3 = dwordOf<3>(limits);
         Bytes c0 = zeroBytes(), c1 = zeroBytes(), c2 = zeroBytes(), c3 = zeroBytes();
         // Blocks pairs - 1 down to 0 by a jump into straight-line code, as
-        // forBlocksDown (the switch on pairs & 31, 32 as 0: no bounds check).
+        // forBlocksDown, over 32 blocks (STRIA_BLOCKS_DOWN_32).
 #define STRIA_AT_LEAST(c, l, p, b) c = sub(c, add(atLeast(p + 32 * (b), l), atLeast(p + 32 * (b) + 16, l)))
-#define STRIA_BLOCK(b)                     \
-    case (b) & 31:                         \
-        STRIA_AT_LEAST(c0, l0, p0, b - 1); \
-        STRIA_AT_LEAST(c1, l1, p1, b - 1); \
-        STRIA_AT_LEAST(c2, l2, p2, b - 1); \
-        STRIA_AT_LEAST(c3, l3, p3, b - 1); \
-        [[fallthrough]];
-#define STRIA_BLOCKS8(b) \
-    STRIA_BLOCK(b + 7) STRIA_BLOCK(b + 6) STRIA_BLOCK(b + 5) STRIA_BLOCK(b + 4) STRIA_BLOCK(b + 3) STRIA_BLOCK(b + 2) STRIA_BLOCK(b + 1) STRIA_BLOCK(b)
-        switch (static_cast<unsigned>(pairs) & 31) {
-            STRIA_BLOCKS8(25)
-            STRIA_BLOCKS8(17)
-            STRIA_BLOCKS8(9)
-            STRIA_BLOCK(8)
-            STRIA_BLOCK(7)
-            STRIA_BLOCK(6)
-            STRIA_BLOCK(5)
-            STRIA_BLOCK(4)
-            STRIA_BLOCK(3)
-            STRIA_BLOCK(2)
-        case 1:
-            STRIA_AT_LEAST(c0, l0, p0, 0);
-            STRIA_AT_LEAST(c1, l1, p1, 0);
-            STRIA_AT_LEAST(c2, l2, p2, 0);
-            STRIA_AT_LEAST(c3, l3, p3, 0);
-        }
-#undef STRIA_BLOCKS8
-#undef STRIA_BLOCK
+#define STRIA_STEP(b)                 \
+    STRIA_AT_LEAST(c0, l0, p0, b); \
+    STRIA_AT_LEAST(c1, l1, p1, b); \
+    STRIA_AT_LEAST(c2, l2, p2, b); \
+    STRIA_AT_LEAST(c3, l3, p3, b)
+        STRIA_BLOCKS_DOWN_32(pairs)
+#undef STRIA_STEP
 #undef STRIA_AT_LEAST
         m = stepOfFour(m, bit, sumsOfFour(c0, c1, c2, c3), need);
     }
@@ -710,13 +686,8 @@ std::array<std::uint32_t, 4> fourAlikeBody(const std::array<const std::uint32_t*
     // where the four differ).
     const int blocks = (counts[0] + 3) / 4;
     std::array<const std::uint8_t*, 4> bytes;
-    std::array<std::uint32_t, 4> needs;
-    for (int j = 0; j < 4; ++j) {
-        bytes[j] = reinterpret_cast<const std::uint8_t*>(pixels[j]);
-        const auto n = static_cast<std::uint32_t>(counts[j]);  // >= 1
-        needs[j] = (n - n / 2) * 0x01010101u;
-    }
-    const Bytes need = dwordsOf(needs);
+    for (int j = 0; j < 4; ++j) bytes[j] = reinterpret_cast<const std::uint8_t*>(pixels[j]);
+    const Bytes need = dwordsOf(needsOfFour(counts));
     const std::uint8_t *p0 = bytes[0], *p1 = bytes[1], *p2 = bytes[2], *p3 = bytes[3];
     Bytes m = zeroBytes(), bit = firstBit();
     for (int pass = 0; pass < 8; ++pass, bit = nextBit(bit)) {
