@@ -263,14 +263,14 @@ private:
         std::array<std::int32_t, kChunk> kept;
         for (int chunk = 0; chunk < r.degree; chunk += kChunk) {
             const int chunkEnd = std::min(r.degree, chunk + kChunk);
-            int keptCount = 0;
+            std::ptrdiff_t keptCount = 0;  // (no sign extension per edge)
             for (int i = chunk; i < chunkEnd; ++i) {
                 const int e = ws_.adjacency[r.adjacencyBegin + i];
                 const EdgeFeature& edge = features_[e];
                 kept[keptCount] = e;
                 keptCount += keep(edge, edge.otherEnd(from));
             }
-            for (int k = 0; k < keptCount; ++k)
+            for (std::ptrdiff_t k = 0; k < keptCount; ++k)
                 if (!visit(kept[k], features_[kept[k]].otherEnd(from))) return false;
         }
         return true;
