@@ -447,9 +447,20 @@ private:
         // now and then (sphere: regions one stripe off along its rim).
         if (dir != EdgeDirection::Parallel) {
             const int stripe = f.stripe + static_cast<int>(dir);
-            float q = 0;
-            const float error = edgeError(from, to, edge, stripeSymbol(pattern, f.stripe, stripe), &q);
-            return {error, q, stripe, from};
+            // edgeError(from, to, edge, stripeSymbol(pattern, f.stripe,
+            // stripe), &q) with the symbol seen from a taken directly: the
+            // pattern's symbol up from the lower stripe, reversed where the
+            // edge goes down from a (whichever end `from` is, walking from
+            // a goes up exactly when the edge's direction from a is
+            // forward); one selection, where stripeSymbol and symbolMatch
+            // each reversed by which end `from` is.
+            const SymbolCode up = pattern.edgeSymbol(std::min(f.stripe, stripe));
+            const SymbolCode symbolFromA = edge.directionPlusOne() == 2 ? up : reversedSymbol(up);
+            const float match = edge.bestSymbol() == symbolFromA
+                                    ? edge.bestMatch
+                                    : symbolError(ws_.edgeChanges[e], symbolFromA, scales_);
+            const float q = beta_ * match / std::max(edge.weight, 1.0f) + edge.gradientError;
+            return {match + alpha_ * edge.gradientError, q, stripe, from};
         }
         // Null edge (fig. 6): weak relative to the reference edge, the
         // reference one stripe off, and the (possibly virtual) edge
