@@ -28,6 +28,7 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 #include <limits>
 #include <utility>
 
@@ -146,12 +147,49 @@ public:
             stripes_[r] = -1;
             components_[r] = -1;
         }
-        int seeds = 0;
-        for (int e = 0; e < ws_.edgeCount; ++e) {  // without a branch: which edges qualify is data
-            ws_.edgeOrder[seeds] = e;
-            seeds += (features_[e].direction() != EdgeDirection::Parallel) & (bestError(features_[e]) < A_);
+        // The seeds: the edges across the stripes with bestError < A, listed
+        // without a branch (which edges qualify is data). 4 edges per step,
+        // their features transposed to a field per vector (16 bytes each:
+        // packed bits, weight, bestMatch, gradientError): bestError's
+        // arithmetic (the same float per lane) and both tests in lanes, then
+        // the list written as by the scalar loop after it, which takes the
+        // last edgeCount % 4 and is the reference (19 -> 12 instructions
+        // per edge). The count is a std::ptrdiff_t and edgeCount read once:
+        // GCC sign-extended an int for each store and reloaded edgeCount
+        // after it (the int32 list may alias it).
+        std::ptrdiff_t seeds = 0;
+        const int edgeCount = ws_.edgeCount;
+        int e = 0;
+        static_assert(sizeof(EdgeFeature) == sizeof(Float4));
+        const Float4 alpha4 = Float4{} + alpha_, a4 = Float4{} + A_;
+        std::int32_t* order = ws_.edgeOrder.get();
+        auto load = [&](int i) {
+            Float4 v;
+            std::memcpy(&v, features_ + i, sizeof(v));
+            return v;
+        };
+        for (; e + 4 <= edgeCount; e += 4) {
+            Float4 v[4] = {load(e), load(e + 1), load(e + 2), load(e + 3)};
+            transpose4(v);
+            using Mask = std::int32_t __attribute__((vector_size(16)));
+            const Mask along = ((Mask)v[0] >> EdgeFeature::kEndBits & 3) == 1;  // (the bits, not a conversion)
+            const Mask qualifies = ~along & (v[2] + alpha4 * v[3] < a4);  // (lanes: -1 where true)
+#if defined(__SSE2__)
+            unsigned bits = static_cast<unsigned>(_mm_movemask_ps((__m128)qualifies));
+#else
+            unsigned bits = 0;
+            for (int k = 0; k < 4; ++k) bits |= (static_cast<unsigned>(qualifies[k]) & 1u) << k;
+#endif
+            for (int k = 0; k < 4; ++k) {
+                order[seeds] = e + k;
+                seeds += bits >> k & 1;
+            }
         }
-        sortSeeds(seeds);
+        for (; e < edgeCount; ++e) {  // (directionPlusOne() == 1: along the stripes)
+            order[seeds] = e;
+            seeds += (features_[e].directionPlusOne() != 1) & (bestError(features_[e]) < A_);
+        }
+        sortSeeds(static_cast<int>(seeds));
         ws_.open[0].order = 0;  // the open heap's sentinel (pushOpen), after the sort used the storage
         ws_.passCount = 0;
         for (int i = 0; i < seeds; ++i) {
