@@ -74,6 +74,7 @@ void reserveFrameBuffers(DecoderWorkspace& ws)
                                              sizeof(EdgeChange) / sizeof(std::int32_t) * ws.maxEdges});
     arena.reserve(ws.orderAndPoints, ws.orderEntries * sizeof(std::int32_t));
     arena.reserve(ws.scratch, scratchEntries(w, h, ws.maxRegions, ws.maxEdges));
+    arena.reserve(ws.bitPositions, bitPositionEntries(w));
     arena.reserve(ws.regions, static_cast<std::size_t>(ws.maxRegions));
     arena.reserve(ws.edges, static_cast<std::size_t>(ws.maxEdges));
     arena.reserve(ws.edgeFeatures, static_cast<std::size_t>(ws.maxEdges));

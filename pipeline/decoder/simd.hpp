@@ -74,6 +74,34 @@ template <typename T>
 #endif
 }
 
+// Bit positions as a list ("flattening", simdjson's flatten_bits, Lemire):
+// appends x0 + i for each set bit i of bits to out, in increasing order, and
+// returns out past the last. The reference is the plain loop
+//   for (; bits; bits &= bits - 1) *out++ = x0 + std::countr_zero(bits);
+// whose exit, once per word, a branch predictor misses on most words (the
+// bit counts are noise to it). Here the first kGroup positions are written
+// without a branch, whatever the count (past the last set bit they are
+// junk, which the next word's positions overwrite or the caller never
+// reads), and only a word with more takes a branch (chosen so that few do).
+// A stage walks a whole row's list in one loop: one mispredicted exit per
+// row instead of one per word. out needs room for kGroup entries past the
+// row's last position.
+template <int kGroup>
+[[gnu::always_inline]] inline std::int32_t* appendBitPositions(std::uint64_t bits, std::int32_t x0, std::int32_t* out)
+{
+    const int count = std::popcount(bits);
+    auto group = [&](std::int32_t* to) __attribute__((always_inline)) {
+        for (int i = 0; i < kGroup; ++i) {
+            to[i] = x0 + static_cast<std::int32_t>(lowestBit(bits));  // junk once bits is 0 (unused)
+            bits &= bits - 1;
+        }
+    };
+    group(out);
+    if (count > kGroup) [[unlikely]]
+        for (std::int32_t* to = out + kGroup; bits != 0; to += kGroup) group(to);
+    return out + count;
+}
+
 #if defined(__aarch64__)
 // AArch64 has no movemask: bit i of the result is set where byte i of the 64
 // in m0..m3 (each byte 0 or 0xff) is set. Each byte keeps its own bit of its

@@ -128,6 +128,9 @@ struct DecoderWorkspace {
     // edges' label pairs, then the traversal's seed sort keys and links and its
     // regions' stripes and components, then the depth stage's region stripes.
     ArenaArray<std::int32_t> scratch;
+    // A row's bit positions as lists (appendBitPositions, simd.hpp), for the
+    // watershed's bit loops: bitPositionEntries(width).
+    ArenaArray<std::int32_t> bitPositions;
 
     // Graph.
     int maxRegions = 0, maxEdges = 0, maxPoints = 0;
@@ -173,6 +176,12 @@ struct DecoderWorkspace {
 
 // The 64-bit masks of a row's horizontal borders (DecoderWorkspace::rowBorders).
 inline int borderWords(int width) { return (width + 62) / 64; }
+
+// DecoderWorkspace::bitPositions: three lists (the watershed's step 3), each
+// of half a row's 64-bit words' pixels and the 8 junk entries
+// appendBitPositions may write past a list's last; or one list of a whole row
+// (step 4) and up to 16.
+inline std::size_t bitPositionEntries(int width) { return 3 * (32 * static_cast<std::size_t>((width + 63) / 64) + 8); }
 
 // Watershed: the scratch entries it needs (a descent code byte per pixel).
 std::size_t watershedScratchEntries(int width, int height);
