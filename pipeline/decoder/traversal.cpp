@@ -818,8 +818,11 @@ private:
                 const Mask parallel = (packed >> EdgeFeature::kEndBits & 3) == 1;
                 const Mask noneDecoded = sa & sb, notAllDecoded = sa | sb;
                 const Mask bothMask = ~(parallel | notAllDecoded);
-                const Mask restMask =
-                    (~(parallel | noneDecoded) & notAllDecoded) | (parallel & ~(notAllDecoded | (sa == sb)));
+                // The rest's test as one select by parallel (bsl; its lanes
+                // are -1 or 0) of the two halves' inverses (orr, orn): the
+                // same sign bits; the two masks and their sign bits' tests
+                // 10 instructions where the reference's expression took 12.
+                const Mask restMask = ~(parallel ? notAllDecoded | (sa == sb) : noneDecoded | ~notAllDecoded);
                 bothCount += appendLanes(both + bothCount, indices, laneSignBits(bothMask));
                 restCount += appendLanesBackward(rest - restCount, indices, laneSignBits(restMask));
             }
