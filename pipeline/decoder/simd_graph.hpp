@@ -65,6 +65,15 @@ inline Int16s plus(Int16s a, Int16s b) { return vaddq_s16(a, b); }
 inline Int16s minus(Int16s a, Int16s b) { return vsubq_s16(a, b); }
 inline Floats firstPixel(Int16s v) { return vcvtq_f32_s32(vmovl_s16(vget_low_s16(v))); }
 inline Floats quarter(Floats v) { return vmulq_n_f32(v, 0.25f); }
+// firstPixel(plus(a, b)) and firstPixel(minus(a, b)) by one widening add or
+// subtract (saddl, ssubl) of the low halves, where the int16 add and the
+// widening took two: the same exact integers (int16 sums of bytes' sums and
+// differences do not wrap).
+inline Floats firstPixelOfSum(Int16s a, Int16s b) { return vcvtq_f32_s32(vaddl_s16(vget_low_s16(a), vget_low_s16(b))); }
+inline Floats firstPixelOfDifference(Int16s a, Int16s b)
+{
+    return vcvtq_f32_s32(vsubl_s16(vget_low_s16(a), vget_low_s16(b)));
+}
 // Two rows' 8 bytes' differences and sums, and the next pixel's bytes less
 // these, by the widening forms (usubl, uaddl: one instruction, where
 // widening each operand first took two more); reinterpreted as int16, the
@@ -84,6 +93,22 @@ inline Int16s nextPixelDifference(const std::uint8_t* p)
 }
 inline PairGradient pairTerms(Floats gx, Floats gy, const PairWeights& w)
 {
+#if defined(__aarch64__)
+    // The weights with lane 3 (the next pixel's first channel) 0: both
+    // products there are +-0 (gx, gy are small integers), and so the terms
+    // +0 (fabd's absolute value). Then two pairwise adds give the
+    // reference's sums: {along0 + along1, along2 + 0, across0 + across1,
+    // across2 + 0}, then lanes 0 + 1 and 2 + 3, where a2 + 0 is a2 (a2 >=
+    // +0, or a NaN that stays): (a0 + a1) + a2 as the reference adds them.
+    // The weight vectors are loop invariants (set up once per loop); 2
+    // instructions where the zip, the lane move and two adds below took 5.
+    auto weights = [](float v) { return vsetq_lane_f32(0.0f, vdupq_n_f32(v), 3); };
+    const Floats along = vabdq_f32(vmulq_f32(gx, weights(w.xAlong)), vmulq_f32(gy, weights(w.yAlong)));
+    const Floats across = vabdq_f32(vmulq_f32(gy, weights(w.yAcross)), vmulq_f32(gx, weights(w.xAcross)));
+    const Floats pairs = vpaddq_f32(along, across);
+    const float32x2_t sum = vget_low_f32(vpaddq_f32(pairs, pairs));
+    return {vget_lane_f32(sum, 0), vget_lane_f32(sum, 1)};
+#else
     const Floats along = vabdq_f32(vmulq_n_f32(gx, w.xAlong), vmulq_n_f32(gy, w.yAlong));
     const Floats across = vabdq_f32(vmulq_n_f32(gy, w.yAcross), vmulq_n_f32(gx, w.xAcross));
     // The reference's sums, channel by channel (0 + a = a for a >= +0), for
@@ -94,6 +119,7 @@ inline PairGradient pairTerms(Floats gx, Floats gy, const PairWeights& w)
     const float32x2_t sum = vadd_f32(vadd_f32(vget_low_f32(zipped.val[0]), vget_high_f32(zipped.val[0])),
                                      vget_low_f32(zipped.val[1]));
     return {vget_lane_f32(sum, 0), vget_lane_f32(sum, 1)};
+#endif
 }
 #elif defined(__SSE2__)
 using Int16s = __m128i;
@@ -107,6 +133,8 @@ inline Int16s plus(Int16s a, Int16s b) { return _mm_add_epi16(a, b); }
 inline Int16s minus(Int16s a, Int16s b) { return _mm_sub_epi16(a, b); }
 inline Floats firstPixel(Int16s v) { return _mm_cvtepi32_ps(_mm_srai_epi32(_mm_unpacklo_epi16(v, v), 16)); }
 inline Floats quarter(Floats v) { return _mm_mul_ps(v, _mm_set1_ps(0.25f)); }
+inline Floats firstPixelOfSum(Int16s a, Int16s b) { return firstPixel(plus(a, b)); }
+inline Floats firstPixelOfDifference(Int16s a, Int16s b) { return firstPixel(minus(a, b)); }
 inline Int16s difference8(const std::uint8_t* a, const std::uint8_t* b) { return minus(bytes8(a), bytes8(b)); }
 inline Int16s sum8(const std::uint8_t* a, const std::uint8_t* b) { return plus(bytes8(a), bytes8(b)); }
 inline Int16s nextPixelDifference(const std::uint8_t* p)
@@ -212,7 +240,7 @@ inline PairGradient horizontalPair(const std::uint8_t* up, const std::uint8_t* r
     const std::size_t i = 3 * x;
 #if defined(__ARM_NEON) || defined(__SSE2__)
     const Int16s vertical = difference8(down + i, up + i);
-    const Floats gy = firstPixel(plus(vertical, nextPixel(vertical)));
+    const Floats gy = firstPixelOfSum(vertical, nextPixel(vertical));
     return pairTerms(firstPixel(nextPixelDifference(row + i)), kFolded ? gy : quarter(gy), w);
 #else
     PairGradient out;
@@ -234,8 +262,7 @@ inline PairGradient verticalPair(const std::uint8_t* row, const std::uint8_t* be
     const std::size_t i = 3 * x;
 #if defined(__ARM_NEON) || defined(__SSE2__)
     // The two rows' sums first (exact in int16): one shift of a pixel less.
-    const Int16s across = minus(nextPixel(sum8(row + i, below + i)), sum8(row + i - 3, below + i - 3));
-    const Floats gx = firstPixel(across);
+    const Floats gx = firstPixelOfDifference(nextPixel(sum8(row + i, below + i)), sum8(row + i - 3, below + i - 3));
     return pairTerms(kFolded ? gx : quarter(gx), firstPixel(difference8(below + i, row + i)), w);
 #else
     PairGradient out;

@@ -53,6 +53,64 @@ constexpr int kAlongStripeWeight = 2;
 // stripes along their border; a stripe split by the watershed shows noise.
 constexpr float kNullBorderWeight = 0.5f;
 
+#if defined(__aarch64__)
+// AArch64 list appends of 4 edges (no movemask, no compress store): the
+// lanes' sign bits as a 4-bit mask (cmlt, and with {1, 2, 4, 8}, addv), then
+// per mask a tbl that moves the set lanes of the 4 indices to the front
+// (forward lists) or to the back in reverse (backward lists, rest[-i]), one
+// 16-byte store and the count from a table. The scalar appends (one store
+// and one add per edge, the mask's bit extracted per lane) took ~11 and the
+// bits from GCC's lane moves ~9 instructions per 4 edges and list. The
+// store writes all 4 lanes: the lanes past the count are the next entries'
+// places (overwritten or past the list's end), the list's buffer must hold
+// them.
+struct LaneAppendTables {
+    std::uint8_t forward[16][16];
+    std::uint8_t backward[16][16];
+    std::uint8_t count[16];
+};
+constexpr LaneAppendTables makeLaneAppendTables()
+{
+    LaneAppendTables t{};
+    for (int bits = 0; bits < 16; ++bits) {
+        for (int i = 0; i < 16; ++i) t.forward[bits][i] = t.backward[bits][i] = 0xff;  // (tbl: 0)
+        int n = 0;
+        for (int k = 0; k < 4; ++k) {
+            if (!(bits >> k & 1)) continue;
+            for (int b = 0; b < 4; ++b) {
+                t.forward[bits][4 * n + b] = static_cast<std::uint8_t>(4 * k + b);
+                t.backward[bits][4 * (3 - n) + b] = static_cast<std::uint8_t>(4 * k + b);
+            }
+            ++n;
+        }
+        t.count[bits] = static_cast<std::uint8_t>(n);
+    }
+    return t;
+}
+inline constexpr LaneAppendTables kLaneAppend = makeLaneAppendTables();
+
+// Bit k set where lane k's sign bit is.
+[[gnu::always_inline]] inline unsigned laneSignBits(int32x4_t lanes)
+{
+    const uint32x4_t weights = {1, 2, 4, 8};
+    return vaddvq_u32(vandq_u32(vcltzq_s32(lanes), weights));
+}
+// list[0, count) = the indices' lanes set in bits, in lane order; returns count.
+[[gnu::always_inline]] inline std::ptrdiff_t appendLanes(std::int32_t* list, int32x4_t indices, unsigned bits)
+{
+    const uint8x16_t moved = vqtbl1q_u8(vreinterpretq_u8_s32(indices), vld1q_u8(kLaneAppend.forward[bits]));
+    vst1q_u8(reinterpret_cast<std::uint8_t*>(list), moved);
+    return kLaneAppend.count[bits];
+}
+// list[0], list[-1], .., list[1 - count] = the same; list[-3, 0] written.
+[[gnu::always_inline]] inline std::ptrdiff_t appendLanesBackward(std::int32_t* list, int32x4_t indices, unsigned bits)
+{
+    const uint8x16_t moved = vqtbl1q_u8(vreinterpretq_u8_s32(indices), vld1q_u8(kLaneAppend.backward[bits]));
+    vst1q_u8(reinterpret_cast<std::uint8_t*>(list - 3), moved);
+    return kLaneAppend.count[bits];
+}
+#endif
+
 struct Hypothesis {
     float error = 0;
     float positionError = 0;
@@ -168,6 +226,21 @@ public:
             std::memcpy(&v, features_ + i, sizeof(v));
             return v;
         };
+#if defined(__aarch64__)
+        // One ld4 loads the 4 features a field per vector; appendLanes
+        // writes the list (features_ in a local: GCC reloaded it after
+        // each store to the list).
+        const EdgeFeature* features = features_;
+        int32x4_t indices = {0, 1, 2, 3};
+        for (; e + 4 <= edgeCount; e += 4, indices = vaddq_s32(indices, vdupq_n_s32(4))) {
+            const float32x4x4_t f = vld4q_f32(reinterpret_cast<const float*>(features + e));
+            using Mask = std::int32_t __attribute__((vector_size(16)));
+            const Float4 v[4] = {f.val[0], f.val[1], f.val[2], f.val[3]};
+            const Mask along = ((Mask)v[0] >> EdgeFeature::kEndBits & 3) == 1;
+            const Mask qualifies = ~along & (v[2] + alpha4 * v[3] < a4);
+            seeds += appendLanes(order + seeds, indices, laneSignBits(qualifies));
+        }
+#endif
         for (; e + 4 <= edgeCount; e += 4) {
             Float4 v[4] = {load(e), load(e + 1), load(e + 2), load(e + 3)};
             transpose4(v);
@@ -727,6 +800,33 @@ private:
             int e = 0;
             const GraphEdge* edges = ws_.edges.get();
             using Mask = std::int32_t __attribute__((vector_size(16)));
+#if defined(__aarch64__)
+            // The packed words by one ld4, the lists by appendLanes: 8
+            // entries past the loop's edges keep the lists' garbage lanes (up
+            // to 3 past each count) off the other list's entries. (The
+            // stripes by ld1 lane loads took more: ld1 has no register
+            // offset, an add per lane.) The members in locals: GCC reloaded
+            // them after each store to the lists.
+            const std::int32_t* stripes = stripes_;
+            const EdgeFeature* features = features_;
+            int32x4_t indices = {0, 1, 2, 3};
+            for (; e + 8 <= edgeCount; e += 4, indices = vaddq_s32(indices, vdupq_n_s32(4))) {
+                const GraphEdge* g = edges + e;
+                const Mask sa = {stripes[g[0].a], stripes[g[1].a], stripes[g[2].a], stripes[g[3].a]};
+                const Mask sb = {stripes[g[0].b], stripes[g[1].b], stripes[g[2].b], stripes[g[3].b]};
+                const Mask packed = vld4q_s32(reinterpret_cast<const std::int32_t*>(features + e)).val[0];
+                const Mask parallel = (packed >> EdgeFeature::kEndBits & 3) == 1;
+                const Mask noneDecoded = sa & sb, notAllDecoded = sa | sb;
+                const Mask bothMask = ~(parallel | notAllDecoded);
+                // The rest's test as one select by parallel (bsl; its lanes
+                // are -1 or 0) of the two halves' inverses (orr, orn): the
+                // same sign bits; the two masks and their sign bits' tests
+                // 10 instructions where the reference's expression took 12.
+                const Mask restMask = ~(parallel ? notAllDecoded | (sa == sb) : noneDecoded | ~notAllDecoded);
+                bothCount += appendLanes(both + bothCount, indices, laneSignBits(bothMask));
+                restCount += appendLanesBackward(rest - restCount, indices, laneSignBits(restMask));
+            }
+#endif
             for (; e + 4 <= edgeCount; e += 4) {
                 const GraphEdge* g = edges + e;
                 const Mask sa = {stripes_[g[0].a], stripes_[g[1].a], stripes_[g[2].a], stripes_[g[3].a]};
