@@ -75,6 +75,8 @@ void reserveFrameBuffers(DecoderWorkspace& ws)
     arena.reserve(ws.orderAndPoints, ws.orderEntries * sizeof(std::int32_t));
     arena.reserve(ws.scratch, scratchEntries(w, h, ws.maxRegions, ws.maxEdges));
     arena.reserve(ws.bitPositions, bitPositionEntries(w));
+    arena.reserve(ws.borderPositions, borderPositionEntries(w, h));
+    arena.reserve(ws.borderStarts, static_cast<std::size_t>(h) + 1);
     arena.reserve(ws.regions, static_cast<std::size_t>(ws.maxRegions));
     arena.reserve(ws.edges, static_cast<std::size_t>(ws.maxEdges));
     arena.reserve(ws.edgeFeatures, static_cast<std::size_t>(ws.maxEdges));
@@ -117,6 +119,9 @@ Result<std::unique_ptr<Decoder>> Decoder::create(const StripePattern& pattern, c
         return Status::error("the crosstalk matrix is singular (determinant " +
                              std::to_string(cv::determinant(mixing)) + "): it cannot be corrected");
 
+    if (cam.width > 65536)
+        return Status::error("the camera is " + std::to_string(cam.width) +
+                             " pixels wide: the decoder supports at most 65536 (16-bit border columns)");
     auto ws = std::make_unique<DecoderWorkspace>(pattern, params);
     const int w = cam.width, h = cam.height;
     const std::size_t n = static_cast<std::size_t>(w) * h;

@@ -109,6 +109,14 @@ struct DecoderWorkspace {
     // label x differs from label x + 1; written by the regions stage, read by
     // the graph and depth stages (instead of comparing the labels again).
     std::uint64_t* rowBorders = nullptr;
+    // The same borders as lists of their columns x, row y's in increasing
+    // order from borderStarts[y] to borderStarts[y + 1] (height + 1 starts):
+    // written by the regions stage's first pass (appendBitPositions), walked
+    // by its copy pass in one loop per row, where a loop per 64-bit word
+    // mispredicted its exit on most words. borderPositionEntries(width,
+    // height): one per pixel at most (2 B/px), sized once.
+    ArenaArray<std::uint16_t> borderPositions;
+    ArenaArray<std::int32_t> borderStarts;
     ArenaArray<std::int32_t> labels;
     // One buffer, five uses in turn: the watershed's plateau queue and
     // union-find parents, then pixels sorted by label (regions), then the
@@ -176,6 +184,15 @@ struct DecoderWorkspace {
 
 // The 64-bit masks of a row's horizontal borders (DecoderWorkspace::rowBorders).
 inline int borderWords(int width) { return (width + 62) / 64; }
+
+// DecoderWorkspace::borderPositions: each row's borders (fewer than width:
+// columns 0 to width - 2) and the kBorderGroup junk entries appendBitPositions
+// may write past the last. uint16 columns: widths up to 65536.
+inline constexpr int kBorderGroup = 16;
+inline std::size_t borderPositionEntries(int width, int height)
+{
+    return static_cast<std::size_t>(std::max(width - 1, 0)) * static_cast<std::size_t>(height) + kBorderGroup;
+}
 
 // DecoderWorkspace::bitPositions: three lists (the watershed's step 3), each
 // of half a row's 64-bit words' pixels and the 8 junk entries
