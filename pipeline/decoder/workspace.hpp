@@ -112,8 +112,9 @@ struct DecoderWorkspace {
     // The same borders as lists of their columns x, row y's in increasing
     // order from borderStarts[y] to borderStarts[y + 1] (height + 1 starts):
     // written by the regions stage's first pass (appendBitPositions), walked
-    // by its copy pass and depth's label changes in one loop per row, where
-    // a loop per 64-bit word mispredicted its exit on most words. borderPositionEntries(width,
+    // by its copy pass, the graph's horizontal pairs and depth's label
+    // changes in one loop per row, where a loop per 64-bit word mispredicted
+    // its exit on most words. borderPositionEntries(width,
     // height): one per pixel at most (2 B/px), sized once.
     ArenaArray<std::uint16_t> borderPositions;
     ArenaArray<std::int32_t> borderStarts;
