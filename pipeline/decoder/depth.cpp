@@ -469,10 +469,10 @@ STRIA_X86_CLONES void computePoints(DecoderWorkspace& ws)
         const std::uint8_t* row = ws.frame.row(y);
         const RowRays rays(ws, y);
         // The row's borders from the regions stage's list (in increasing
-        // order); the reference is a walk of its masks, ws.rowBorders, by
+        // order); the reference is a walk of its masks (borderMask) by
         // a loop per 64-bit word, whose exit was mispredicted on most words.
-        const std::uint16_t* border = ws.borderPositions.get() + ws.borderStarts[y];
-        const std::uint16_t* const bordersEnd = ws.borderPositions.get() + ws.borderStarts[y + 1];
+        const std::uint16_t* border = ws.borderPositions + ws.borderStarts[y];
+        const std::uint16_t* const bordersEnd = ws.borderPositions + ws.borderStarts[y + 1];
         std::fill(rowPoint, rowPoint + edgeCount, -1);
         // The next row's pixels and labels on their way to the cache while
         // this row is located: the windows read most of a row's cache lines

@@ -356,7 +356,7 @@ STRIA_X86_CLONES void buildGraph(DecoderWorkspace& ws)
     const graph_kernels::PairWeights horizontalWeights = graph_kernels::horizontalFoldedWeights(primary);
     const graph_kernels::PairWeights verticalWeights = graph_kernels::verticalFoldedWeights(primary);
     const bool folds = graph_kernels::quarterFolds(primary);
-    const std::uint16_t* const positions = ws.borderPositions.get();
+    const std::uint16_t* const positions = ws.borderPositions;
     const std::int32_t* const starts = ws.borderStarts.get();
     const int lastH = w - 2;  // the last horizontal pair
     // Inlined (both variants) by force: called, its captures were read from
@@ -371,7 +371,7 @@ STRIA_X86_CLONES void buildGraph(DecoderWorkspace& ws)
         const PairDeltas horizontal = pairDeltas(32), vertical = pairDeltas(48);
         // The horizontal pairs from the regions stage's list of the row's
         // borders (ws.borderPositions, in increasing order), in one loop per
-        // row; the reference is a walk of its masks (ws.rowBorders) by a
+        // row; the reference is a walk of its masks (borderMask) by a
         // loop per 64-bit word, whose exit was mispredicted on most words
         // (with pointers to the word's column, hidden from GCC; here the
         // same count of instructions without them).

@@ -84,7 +84,7 @@ template <bool shuffled, bool threeBlocks>
 [[gnu::always_inline]] inline void copyRuns(const DecoderWorkspace& ws, std::int64_t* next)
 {
     const int w = ws.width, h = ws.height;
-    const std::uint16_t* const positions = ws.borderPositions.get();
+    const std::uint16_t* const positions = ws.borderPositions;
     const std::int32_t* const starts = ws.borderStarts.get();
     // Rows whose next row has 25 bytes or more (the whole blocks read up to
     // 25 bytes past a row's end; 37 with the third block).
@@ -178,7 +178,7 @@ template <bool shuffled, bool threeBlocks>
             x = end;
         };
         // The first pass's list of the row's borders (the reference:
-        // forEachBit(masks, w - 1, visit), a loop per 64-bit word).
+        // forEachBorder(row, row + 1, w - 1, visit), a loop per 64-bit word).
         const std::uint16_t* const positionsEnd = positions + starts[y + 1];
         for (const std::uint16_t* p = positions + starts[y]; p != positionsEnd; ++p) run(std::ptrdiff_t{*p} + 1);
         run(w);
@@ -238,19 +238,17 @@ STRIA_X86_CLONES void computeRegions(DecoderWorkspace& ws)
     std::fill(counter, counter + count, 0);
 
     // The first pass: each run's length and coordinate sums to its region's.
-    // It stores the rows' border masks (ws.rowBorders), which the graph and
-    // depth stages walk again, and their positions as lists
-    // (ws.borderPositions, appendBitPositions: kBorderGroup per word without
-    // a branch), which it and the copy pass walk in one loop per row. The
-    // reference is forEachBorder(row, row + 1, w - 1, masks, visit), the
-    // loop per word, whose exit a branch predictor missed on most words.
-    const int words = borderWords(w);
-    std::uint16_t* const positions = ws.borderPositions.get();
+    // It stores the rows' borders as lists of their columns
+    // (ws.borderPositions, flattened from borderMask's 64-bit masks by
+    // appendBitPositions: kBorderGroup per word without a branch), which it,
+    // the copy pass and the graph and depth stages walk in one loop per row.
+    // The reference is forEachBorder(row, row + 1, w - 1, visit), a loop per
+    // word, whose exit a branch predictor missed on most words.
+    std::uint16_t* const positions = ws.borderPositions;
     std::int32_t* const starts = ws.borderStarts.get();
     std::uint16_t* positionsEnd = positions;
     for (int y = 0; y < h; ++y) {
         const std::int32_t* row = label + static_cast<std::ptrdiff_t>(y) * w;
-        std::uint64_t* masks = ws.rowBorders + static_cast<std::ptrdiff_t>(y) * words;
         const std::int64_t y64 = y;
         std::ptrdiff_t x = 0;
         auto run = [&](std::ptrdiff_t end) {
@@ -262,9 +260,8 @@ STRIA_X86_CLONES void computeRegions(DecoderWorkspace& ws)
         };
         std::uint16_t* const rowPositions = positionsEnd;
         starts[y] = static_cast<std::int32_t>(rowPositions - positions);
-        for (int i0 = 0; i0 < w - 1; i0 += 64, ++masks) {
+        for (int i0 = 0; i0 < w - 1; i0 += 64) {
             const std::uint64_t bits = borderMask(row + i0, row + i0 + 1, std::min(64, w - 1 - i0));
-            *masks = bits;
             positionsEnd = appendBitPositions<kBorderGroup>(bits, static_cast<std::uint16_t>(i0), positionsEnd);
         }
         for (const std::uint16_t* p = rowPositions; p != positionsEnd; ++p) run(std::ptrdiff_t{*p} + 1);
@@ -283,15 +280,13 @@ STRIA_X86_CLONES void computeRegions(DecoderWorkspace& ws)
         first += counter[r] + kRegionGap;
     }
 
-    // The runs of every 8th row, from their masks (only the copy's choice
+    // The runs of every 8th row, from their lists (only the copy's choice
     // of blocks depends on it: a sample suffices; a count per run in the
     // first pass took 0.08 M instructions per 780x580 decode, this 0.01 M).
     std::int64_t sampledRuns = 0, sampledPixels = 0;
     for (int y = 0; y < h; y += 8) {
-        const std::uint64_t* masks = ws.rowBorders + static_cast<std::ptrdiff_t>(y) * words;
-        sampledRuns += 1;
+        sampledRuns += 1 + starts[y + 1] - starts[y];
         sampledPixels += w;
-        for (int i = 0; i < words; ++i) sampledRuns += std::popcount(masks[i]);
     }
     copyRunsVersion(ws, next, sampledPixels > 8 * sampledRuns);
 

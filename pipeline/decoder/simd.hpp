@@ -239,25 +239,6 @@ inline void forEachBorder(const std::int32_t* a, const std::int32_t* b, int coun
         for (std::uint64_t bits = borderMask(a + i0, b + i0, std::min(64, count - i0)); bits; bits &= bits - 1)
             visit(i0 + std::countr_zero(bits));
 }
-// The same, also storing the masks (one per 64, count / 64 rounded up) for
-// later walks by forEachBit, which then skip the comparisons.
-template <class Visit>
-inline void forEachBorder(const std::int32_t* a, const std::int32_t* b, int count, std::uint64_t* masks, Visit&& visit)
-{
-    for (int i0 = 0; i0 < count; i0 += 64, ++masks) {
-        std::uint64_t bits = borderMask(a + i0, b + i0, std::min(64, count - i0));
-        *masks = bits;
-        for (; bits; bits &= bits - 1) visit(i0 + std::countr_zero(bits));
-    }
-}
-// Calls visit(i) for each set bit i < count of masks (64 per word), in
-// increasing order.
-template <class Visit>
-inline void forEachBit(const std::uint64_t* masks, int count, Visit&& visit)
-{
-    for (int i0 = 0; i0 < count; i0 += 64, ++masks)
-        for (std::uint64_t bits = *masks; bits; bits &= bits - 1) visit(i0 + std::countr_zero(bits));
-}
 // Eq. 8's terms of one border pixel pair: the image gradient at the pair's
 // middle, summed over the channels as |component along primary| and
 // |component across it|. The reference is pairGradient (workspace.hpp), for

@@ -708,7 +708,7 @@ TEST(DecoderKernels, GraphNormalsSaturateLikeTheReference)
         for (int y = 0; y < h; ++y) {
             const std::int32_t* row = c.ws.labels.get() + y * w;
             c.ws.borderStarts[y] = borders;
-            forEachBorder(row, row + 1, w - 1, c.ws.rowBorders + y * borderWords(w),
+            forEachBorder(row, row + 1, w - 1,
                           [&](int x) { c.ws.borderPositions[borders++] = static_cast<std::uint16_t>(x); });
         }
         c.ws.borderStarts[h] = borders;
