@@ -65,9 +65,9 @@ void reserveFrameBuffers(DecoderWorkspace& ws)
 {
     const int w = ws.width, h = ws.height;
     const std::size_t n = static_cast<std::size_t>(w) * h;
-    const std::size_t borderBytes = sizeof(std::uint64_t) * static_cast<std::size_t>(borderWords(w)) * h;
     WorkspaceArena& arena = ws.arena;
-    arena.reserve(ws.gradient, std::max(n, borderBytes));
+    // The gradient, then (from the regions to the depth stage) the border lists.
+    arena.reserve(ws.gradient, std::max(n, sizeof(std::uint16_t) * borderPositionEntries(w, h)));
     arena.reserve(ws.labels, n);
     ws.orderEntries = std::max<std::size_t>({watershedOrderEntries(w, h), regionOrderEntries(n, ws.maxRegions),
                                              graphTableEntries(ws.maxRegions, ws.maxEdges),
@@ -75,6 +75,7 @@ void reserveFrameBuffers(DecoderWorkspace& ws)
     arena.reserve(ws.orderAndPoints, ws.orderEntries * sizeof(std::int32_t));
     arena.reserve(ws.scratch, scratchEntries(w, h, ws.maxRegions, ws.maxEdges));
     arena.reserve(ws.bitPositions, bitPositionEntries(w));
+    arena.reserve(ws.borderStarts, static_cast<std::size_t>(h) + 1);
     arena.reserve(ws.regions, static_cast<std::size_t>(ws.maxRegions));
     arena.reserve(ws.edges, static_cast<std::size_t>(ws.maxEdges));
     arena.reserve(ws.edgeFeatures, static_cast<std::size_t>(ws.maxEdges));
@@ -84,7 +85,7 @@ void reserveFrameBuffers(DecoderWorkspace& ws)
 std::size_t allocateWorkspace(DecoderWorkspace& ws)
 {
     const std::size_t bytes = ws.arena.allocate();
-    ws.rowBorders = reinterpret_cast<std::uint64_t*>(ws.gradient.get());
+    ws.borderPositions = reinterpret_cast<std::uint16_t*>(ws.gradient.get());
     ws.pixelOrder = reinterpret_cast<std::int32_t*>(ws.orderAndPoints.get());
     ws.points = reinterpret_cast<ScanPoint*>(ws.orderAndPoints.get());
     ws.edgeChanges = reinterpret_cast<EdgeChange*>(ws.orderAndPoints.get());
@@ -117,6 +118,9 @@ Result<std::unique_ptr<Decoder>> Decoder::create(const StripePattern& pattern, c
         return Status::error("the crosstalk matrix is singular (determinant " +
                              std::to_string(cv::determinant(mixing)) + "): it cannot be corrected");
 
+    if (cam.width > 65536)
+        return Status::error("the camera is " + std::to_string(cam.width) +
+                             " pixels wide: the decoder supports at most 65536 (16-bit border columns)");
     auto ws = std::make_unique<DecoderWorkspace>(pattern, params);
     const int w = cam.width, h = cam.height;
     const std::size_t n = static_cast<std::size_t>(w) * h;

@@ -468,7 +468,11 @@ STRIA_X86_CLONES void computePoints(DecoderWorkspace& ws)
         const std::int32_t* label = labels + static_cast<std::ptrdiff_t>(y) * w;
         const std::uint8_t* row = ws.frame.row(y);
         const RowRays rays(ws, y);
-        const std::uint64_t* borders = ws.rowBorders + static_cast<std::ptrdiff_t>(y) * borderWords(w);
+        // The row's borders from the regions stage's list (in increasing
+        // order); the reference is a walk of its masks (borderMask) by
+        // a loop per 64-bit word, whose exit was mispredicted on most words.
+        const std::uint16_t* border = ws.borderPositions + ws.borderStarts[y];
+        const std::uint16_t* const bordersEnd = ws.borderPositions + ws.borderStarts[y + 1];
         std::fill(rowPoint, rowPoint + edgeCount, -1);
         // The next row's pixels and labels on their way to the cache while
         // this row is located: the windows read most of a row's cache lines
@@ -498,27 +502,25 @@ STRIA_X86_CLONES void computePoints(DecoderWorkspace& ws)
         // row's start) to the next share a label. Carried from change to
         // change, it halves step 1's look-ups.
         std::int32_t leftStripePlus1 = stripes[label[0]] + 1;
-        for (std::ptrdiff_t x0 = 0; x0 < w - 1; x0 += 64) {
+        // Up to kBatch borders per batch.
+        while (border != bordersEnd) {
+            const std::uint16_t* const batchEnd = bordersEnd - border > kBatch ? border + kBatch : bordersEnd;
             // Step 1: label changes between regions decoded as consecutive
-            // stripes k, k + 1, from the regions stage's border masks, gathered without a
+            // stripes k, k + 1, from the regions stage's border lists, gathered without a
             // branch per change: whether two neighbours share a label, and
             // whether their stripes are consecutive, is noise to a branch
             // predictor (85 000 and 22 000 mispredictions per 780x580 frame).
-            // 12 instructions per change (x86-64-v3): the window's first
-            // sample from x0's by one add (the label index folds its offset
-            // in), the stripe carried plus 1 (one lea for the test below,
-            // where a subtraction and an increment needed a copy), the
-            // bit's position by lowestBit (780x580: 15 before).
-            const std::ptrdiff_t firstOfWord = x0 - 2 * kSearchRadius;
-            for (std::uint64_t bits = borders[x0 / 64]; bits; bits &= bits - 1) {
-                const std::ptrdiff_t first = firstOfWord + static_cast<std::ptrdiff_t>(lowestBit(bits));
+            // The stripe carried plus 1 (one lea for the test below, where a
+            // subtraction and an increment needed a copy).
+            for (; border != batchEnd; ++border) {
+                const std::ptrdiff_t first = std::ptrdiff_t{*border} - 2 * kSearchRadius;
                 const std::int32_t rightStripe = stripes[label[first + 2 * kSearchRadius + 1]];
                 firsts[count] = static_cast<std::int32_t>(first);
                 // leftStripe + 1 - rightStripe = 0 or 2 (both decoded, as kUndecoded is far from every stripe).
                 count += ((static_cast<unsigned>(leftStripePlus1) - static_cast<unsigned>(rightStripe)) & ~2u) == 0;
                 leftStripePlus1 = rightStripe + 1;
             }
-            if (count > 0 && (count > kBatch - 64 || x0 + 64 >= w - 1)) {
+            if (count > 0) {
                 const int batch = static_cast<int>(count);
                 // Step 2: weights per channel: expected sign / range, walking
                 // left to right. The 3 channels in lanes (one division, and

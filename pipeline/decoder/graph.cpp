@@ -356,9 +356,9 @@ STRIA_X86_CLONES void buildGraph(DecoderWorkspace& ws)
     const graph_kernels::PairWeights horizontalWeights = graph_kernels::horizontalFoldedWeights(primary);
     const graph_kernels::PairWeights verticalWeights = graph_kernels::verticalFoldedWeights(primary);
     const bool folds = graph_kernels::quarterFolds(primary);
-    const int words = borderWords(w);
-    const int lastH = w - 2;  // the last horizontal pair, in the last word
-    const std::uint64_t lastHBit = std::uint64_t{1} << (lastH & 63);
+    const std::uint16_t* const positions = ws.borderPositions;
+    const std::int32_t* const starts = ws.borderStarts.get();
+    const int lastH = w - 2;  // the last horizontal pair
     // Inlined (both variants) by force: called, its captures were read from
     // memory in the pair loops, and GCC's choice flipped with small changes
     // of the loop.
@@ -368,44 +368,27 @@ STRIA_X86_CLONES void buildGraph(DecoderWorkspace& ws)
         const std::uint8_t* up = ws.frame.row(std::max(y - 1, 0));
         const std::uint8_t* pixels = ws.frame.row(y);
         const std::uint8_t* down = ws.frame.row(std::min(y + 1, h - 1));
-        const std::uint64_t* masks = ws.rowBorders + static_cast<std::ptrdiff_t>(y) * words;
         const PairDeltas horizontal = pairDeltas(32), vertical = pairDeltas(48);
-        // The pair loops address a word's labels and pixels from pointers
-        // to its column, set once per word: the column in the word
-        // (countr_zero) is the only index per pair, no add of the word's
-        // column to it. The horizontal loop's pointers are hidden from GCC
-        // (in place, so that they need no copies), which would otherwise fold
-        // them back into the row pointers and add the column per pair again
-        // (the vertical loop keeps them without: a barrier there cost a
-        // spill).
+        // The horizontal pairs from the regions stage's list of the row's
+        // borders (ws.borderPositions, in increasing order), in one loop per
+        // row; the reference is a walk of its masks (borderMask) by a
+        // loop per 64-bit word, whose exit was mispredicted on most words
+        // (with pointers to the word's column, hidden from GCC; here the
+        // same count of instructions without them).
         if (lastH >= 0) {
-            const std::int32_t* rowAt = row;
-            const std::uint8_t *upAt = up, *pixelsAt = pixels, *downAt = down;
-            // Inlined by force too: the clones left the checked rows' one a
-            // call, and all of the loops' captures (the edge count, the
-            // table) then lived in memory.
-            auto horizontalPairs = [&](std::uint64_t bits) __attribute__((always_inline)) {
-                hide(rowAt);
-                hide(upAt);
-                hide(pixelsAt);
-                hide(downAt);
-                for (; bits; bits &= bits - 1) {
-                    const std::size_t x = lowestBit(bits);
-                    addPair(labelPair(rowAt + x), horizontal,
-                            graph_kernels::horizontalPair<kFolded>(upAt, pixelsAt, downAt, x,
-                                                                   kFolded ? horizontalWeights : plain),
-                            checked);
-                }
-            };
-            for (int k = 0; k + 1 < words; ++k) {
-                horizontalPairs(masks[k]);
-                rowAt += 64;
-                upAt += 3 * 64;
-                pixelsAt += 3 * 64;
-                downAt += 3 * 64;
+            const std::uint16_t* border = positions + starts[y];
+            const std::uint16_t* bordersEnd = positions + starts[y + 1];
+            // The last pair (column lastH) by pairGradient, after the others.
+            const bool last = border != bordersEnd && bordersEnd[-1] == lastH;
+            bordersEnd -= last;
+            for (; border != bordersEnd; ++border) {
+                const std::size_t x = *border;
+                addPair(labelPair(row + x), horizontal,
+                        graph_kernels::horizontalPair<kFolded>(up, pixels, down, x,
+                                                               kFolded ? horizontalWeights : plain),
+                        checked);
             }
-            horizontalPairs(masks[words - 1] & ~lastHBit);
-            if (masks[words - 1] & lastHBit)
+            if (last)
                 addPair(labelPair(row + lastH), horizontal, pairGradient(ws.frame, lastH, y, true, primary), checked);
         }
         if (y + 1 < h) {

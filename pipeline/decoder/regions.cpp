@@ -83,14 +83,15 @@ using Bytes16 = std::uint8_t __attribute__((vector_size(16)));
 template <bool shuffled, bool threeBlocks>
 [[gnu::always_inline]] inline void copyRuns(const DecoderWorkspace& ws, std::int64_t* next)
 {
-    const int w = ws.width, h = ws.height, words = borderWords(w);
+    const int w = ws.width, h = ws.height;
+    const std::uint16_t* const positions = ws.borderPositions;
+    const std::int32_t* const starts = ws.borderStarts.get();
     // Rows whose next row has 25 bytes or more (the whole blocks read up to
     // 25 bytes past a row's end; 37 with the third block).
     const int blockRows = w >= (threeBlocks ? 13 : 9) ? h - 1 : 0;
     for (int y = 0; y < h; ++y) {
         const std::int32_t* row = ws.labels.get() + static_cast<std::ptrdiff_t>(y) * w;
         const std::uint8_t* pixels = ws.frame.row(y);
-        const std::uint64_t* masks = ws.rowBorders + static_cast<std::ptrdiff_t>(y) * words;
         std::ptrdiff_t x = 0;
         if (y >= blockRows) {
             auto run = [&](std::ptrdiff_t end) {
@@ -108,7 +109,8 @@ template <bool shuffled, bool threeBlocks>
                 if (whole < end) copy(3);
                 x = end;
             };
-            forEachBit(masks, w - 1, [&](int last) { run(last + 1); });
+            for (const std::uint16_t* p = positions + starts[y]; p != positions + starts[y + 1]; ++p)
+                run(std::ptrdiff_t{*p} + 1);
             run(w);
             continue;
         }
@@ -175,10 +177,10 @@ template <bool shuffled, bool threeBlocks>
             }
             x = end;
         };
-        // forEachBit's loop with 64-bit positions (no sign extensions).
-        for (std::ptrdiff_t i0 = 0; i0 < w - 1; i0 += 64, ++masks)
-            for (std::uint64_t bits = *masks; bits; bits &= bits - 1)
-                run(i0 + static_cast<unsigned>(std::countr_zero(bits)) + 1);
+        // The first pass's list of the row's borders (the reference:
+        // forEachBorder(row, row + 1, w - 1, visit), a loop per 64-bit word).
+        const std::uint16_t* const positionsEnd = positions + starts[y + 1];
+        for (const std::uint16_t* p = positions + starts[y]; p != positionsEnd; ++p) run(std::ptrdiff_t{*p} + 1);
         run(w);
     }
 }
@@ -236,12 +238,17 @@ STRIA_X86_CLONES void computeRegions(DecoderWorkspace& ws)
     std::fill(counter, counter + count, 0);
 
     // The first pass: each run's length and coordinate sums to its region's.
-    // It stores the rows' border masks (ws.rowBorders), which the copy pass
-    // and the graph and depth stages walk again.
-    const int words = borderWords(w);
+    // It stores the rows' borders as lists of their columns
+    // (ws.borderPositions, flattened from borderMask's 64-bit masks by
+    // appendBitPositions: kBorderGroup per word without a branch), which it,
+    // the copy pass and the graph and depth stages walk in one loop per row.
+    // The reference is forEachBorder(row, row + 1, w - 1, visit), a loop per
+    // word, whose exit a branch predictor missed on most words.
+    std::uint16_t* const positions = ws.borderPositions;
+    std::int32_t* const starts = ws.borderStarts.get();
+    std::uint16_t* positionsEnd = positions;
     for (int y = 0; y < h; ++y) {
         const std::int32_t* row = label + static_cast<std::ptrdiff_t>(y) * w;
-        std::uint64_t* masks = ws.rowBorders + static_cast<std::ptrdiff_t>(y) * words;
         const std::int64_t y64 = y;
         std::ptrdiff_t x = 0;
         auto run = [&](std::ptrdiff_t end) {
@@ -251,9 +258,16 @@ STRIA_X86_CLONES void computeRegions(DecoderWorkspace& ws)
             sums[2 * r + 1] += y64 * length;
             x = end;
         };
-        forEachBorder(row, row + 1, w - 1, masks, [&](int last) { run(last + 1); });
+        std::uint16_t* const rowPositions = positionsEnd;
+        starts[y] = static_cast<std::int32_t>(rowPositions - positions);
+        for (int i0 = 0; i0 < w - 1; i0 += 64) {
+            const std::uint64_t bits = borderMask(row + i0, row + i0 + 1, std::min(64, w - 1 - i0));
+            positionsEnd = appendBitPositions<kBorderGroup>(bits, static_cast<std::uint16_t>(i0), positionsEnd);
+        }
+        for (const std::uint16_t* p = rowPositions; p != positionsEnd; ++p) run(std::ptrdiff_t{*p} + 1);
         run(w);
     }
+    starts[h] = static_cast<std::int32_t>(positionsEnd - positions);
     auto* sorted = reinterpret_cast<std::uint32_t*>(ws.pixelOrder);
     std::int64_t* next = sums;  // next[r] overwrites sums[r], read at r / 2
     std::uint32_t* first = sorted;
@@ -266,15 +280,13 @@ STRIA_X86_CLONES void computeRegions(DecoderWorkspace& ws)
         first += counter[r] + kRegionGap;
     }
 
-    // The runs of every 8th row, from their masks (only the copy's choice
+    // The runs of every 8th row, from their lists (only the copy's choice
     // of blocks depends on it: a sample suffices; a count per run in the
     // first pass took 0.08 M instructions per 780x580 decode, this 0.01 M).
     std::int64_t sampledRuns = 0, sampledPixels = 0;
     for (int y = 0; y < h; y += 8) {
-        const std::uint64_t* masks = ws.rowBorders + static_cast<std::ptrdiff_t>(y) * words;
-        sampledRuns += 1;
+        sampledRuns += 1 + starts[y + 1] - starts[y];
         sampledPixels += w;
-        for (int i = 0; i < words; ++i) sampledRuns += std::popcount(masks[i]);
     }
     copyRunsVersion(ws, next, sampledPixels > 8 * sampledRuns);
 

@@ -12,6 +12,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <limits>
+#include <type_traits>
 
 #if defined(__aarch64__)
 #include <arm_neon.h>
@@ -85,20 +86,22 @@ template <typename T>
 // reads), and only a word with more takes a branch (chosen so that few do).
 // A stage walks a whole row's list in one loop: one mispredicted exit per
 // row instead of one per word. out needs room for kGroup entries past the
-// row's last position.
-template <int kGroup>
-[[gnu::always_inline]] inline std::int32_t* appendBitPositions(std::uint64_t bits, std::int32_t x0, std::int32_t* out)
+// row's last position. Position: std::int32_t (the watershed's lists) or
+// std::uint16_t (the regions' border lists, DecoderWorkspace::borderPositions).
+template <int kGroup, class Position>
+[[gnu::always_inline]] inline Position* appendBitPositions(std::uint64_t bits, std::type_identity_t<Position> x0,
+                                                           Position* out)
 {
     const int count = std::popcount(bits);
-    auto group = [&](std::int32_t* to) __attribute__((always_inline)) {
+    auto group = [&](Position* to) __attribute__((always_inline)) {
         for (int i = 0; i < kGroup; ++i) {
-            to[i] = x0 + static_cast<std::int32_t>(lowestBit(bits));  // junk once bits is 0 (unused)
+            to[i] = static_cast<Position>(x0 + static_cast<Position>(lowestBit(bits)));  // junk once bits is 0 (unused)
             bits &= bits - 1;
         }
     };
     group(out);
     if (count > kGroup) [[unlikely]]
-        for (std::int32_t* to = out + kGroup; bits != 0; to += kGroup) group(to);
+        for (Position* to = out + kGroup; bits != 0; to += kGroup) group(to);
     return out + count;
 }
 
@@ -235,25 +238,6 @@ inline void forEachBorder(const std::int32_t* a, const std::int32_t* b, int coun
     for (int i0 = 0; i0 < count; i0 += 64)
         for (std::uint64_t bits = borderMask(a + i0, b + i0, std::min(64, count - i0)); bits; bits &= bits - 1)
             visit(i0 + std::countr_zero(bits));
-}
-// The same, also storing the masks (one per 64, count / 64 rounded up) for
-// later walks by forEachBit, which then skip the comparisons.
-template <class Visit>
-inline void forEachBorder(const std::int32_t* a, const std::int32_t* b, int count, std::uint64_t* masks, Visit&& visit)
-{
-    for (int i0 = 0; i0 < count; i0 += 64, ++masks) {
-        std::uint64_t bits = borderMask(a + i0, b + i0, std::min(64, count - i0));
-        *masks = bits;
-        for (; bits; bits &= bits - 1) visit(i0 + std::countr_zero(bits));
-    }
-}
-// Calls visit(i) for each set bit i < count of masks (64 per word), in
-// increasing order.
-template <class Visit>
-inline void forEachBit(const std::uint64_t* masks, int count, Visit&& visit)
-{
-    for (int i0 = 0; i0 < count; i0 += 64, ++masks)
-        for (std::uint64_t bits = *masks; bits; bits &= bits - 1) visit(i0 + std::countr_zero(bits));
 }
 // Eq. 8's terms of one border pixel pair: the image gradient at the pair's
 // middle, summed over the channels as |component along primary| and

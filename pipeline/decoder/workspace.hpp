@@ -104,11 +104,17 @@ struct DecoderWorkspace {
 
     // Per pixel.
     ArenaArray<std::uint8_t> gradient;
-    // In the gradient buffer, free after the watershed: each label row's
-    // horizontal borders, borderWords(width) masks per row, bit x set where
-    // label x differs from label x + 1; written by the regions stage, read by
-    // the graph and depth stages (instead of comparing the labels again).
-    std::uint64_t* rowBorders = nullptr;
+    // In the gradient buffer (free after the watershed; 2 B/px, sized for
+    // borderPositionEntries(width, height): one per pixel at most): each
+    // label row's horizontal borders (x where label x differs from label
+    // x + 1) as lists of their columns x, row y's in increasing order from
+    // borderStarts[y] to borderStarts[y + 1] (height + 1 starts). Written by
+    // the regions stage's first pass (appendBitPositions), walked by its copy
+    // pass, the graph's horizontal pairs and depth's label changes in one
+    // loop per row, where a loop per 64-bit word mispredicted its exit on
+    // most words.
+    std::uint16_t* borderPositions = nullptr;
+    ArenaArray<std::int32_t> borderStarts;
     ArenaArray<std::int32_t> labels;
     // One buffer, five uses in turn: the watershed's plateau queue and
     // union-find parents, then pixels sorted by label (regions), then the
@@ -174,8 +180,14 @@ struct DecoderWorkspace {
     std::size_t allocatedBytes = 0;  // by create(): Decoder::workspaceBytes()
 };
 
-// The 64-bit masks of a row's horizontal borders (DecoderWorkspace::rowBorders).
-inline int borderWords(int width) { return (width + 62) / 64; }
+// DecoderWorkspace::borderPositions: each row's borders (fewer than width:
+// columns 0 to width - 2) and the kBorderGroup junk entries appendBitPositions
+// may write past the last. uint16 columns: widths up to 65536.
+inline constexpr int kBorderGroup = 16;
+inline std::size_t borderPositionEntries(int width, int height)
+{
+    return static_cast<std::size_t>(std::max(width - 1, 0)) * static_cast<std::size_t>(height) + kBorderGroup;
+}
 
 // DecoderWorkspace::bitPositions: three lists (the watershed's step 3), each
 // of half a row's 64-bit words' pixels and the 8 junk entries
@@ -210,7 +222,7 @@ std::size_t scratchEntries(int width, int height, int maxRegions, int maxEdges);
 void reserveFrameBuffers(DecoderWorkspace& ws);
 // Allocates ws.arena with what was planned in it and sets the views into the
 // order buffer and the gradient buffer (pixelOrder, points, edgeChanges,
-// rowBorders); returns the arena's bytes.
+// borderPositions); returns the arena's bytes.
 std::size_t allocateWorkspace(DecoderWorkspace& ws);
 // reserveFrameBuffers, then allocateWorkspace (the stage tests' workspace).
 std::size_t allocateFrameBuffers(DecoderWorkspace& ws);

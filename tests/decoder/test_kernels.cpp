@@ -703,10 +703,15 @@ TEST(DecoderKernels, GraphNormalsSaturateLikeTheReference)
         const int w = c.ws.width, h = c.ws.height;
         for (int y = 0; y < h; ++y)
             for (int x = 0; x < w; ++x) c.ws.labels[y * w + x] = ((x + slope * y) % 3 + 3) % 3;
+        // The rows' border lists, as the regions stage writes them.
+        std::int32_t borders = 0;
         for (int y = 0; y < h; ++y) {
             const std::int32_t* row = c.ws.labels.get() + y * w;
-            forEachBorder(row, row + 1, w - 1, c.ws.rowBorders + y * borderWords(w), [](int) {});
+            c.ws.borderStarts[y] = borders;
+            forEachBorder(row, row + 1, w - 1,
+                          [&](int x) { c.ws.borderPositions[borders++] = static_cast<std::uint16_t>(x); });
         }
+        c.ws.borderStarts[h] = borders;
         c.ws.regionCount = 3;
         EXPECT_EQ(c.differingGraphEdges(), 0) << slope;
         ASSERT_EQ(c.ws.edgeCount, 3);
