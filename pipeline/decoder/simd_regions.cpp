@@ -62,6 +62,13 @@
         STRIA_DOWN_BLOCKS8(64, 64) STRIA_DOWN_BLOCKS8(56, 64) STRIA_DOWN_BLOCKS8(48, 64) STRIA_DOWN_BLOCKS8(40, 64)    \
         STRIA_DOWN_BLOCKS8(32, 64) STRIA_DOWN_BLOCKS8(24, 64) STRIA_DOWN_BLOCKS8(16, 64) STRIA_DOWN_LAST8(64)          \
     }
+// A four-region kernel's step: block b of each region's pixels (p0-p3)
+// against its limits (l0-l3) into its counts (c0-c3), by count(c, l, p, b).
+#define STRIA_FOUR_REGIONS(count, b) \
+    count(c0, l0, p0, b);            \
+    count(c1, l1, p1, b);            \
+    count(c2, l2, p2, b);            \
+    count(c3, l3, p3, b)
 
 namespace stria::pipeline {
 
@@ -412,11 +419,7 @@ inline std::array<int, 3> countAtLeast(const std::uint8_t* bytes, int blocks, co
         // forBlocksDown, over 32 blocks (STRIA_BLOCKS_DOWN_32).
 #define STRIA_BELOW(c, l, p, b) \
     c = _mm256_add_epi8(c, _mm256_cmpgt_epi8(l, _mm256_loadu_si256(reinterpret_cast<const __m256i*>(p + 32 * (b)))))
-#define STRIA_STEP(b)              \
-    STRIA_BELOW(c0, l0, p0, b); \
-    STRIA_BELOW(c1, l1, p1, b); \
-    STRIA_BELOW(c2, l2, p2, b); \
-    STRIA_BELOW(c3, l3, p3, b)
+#define STRIA_STEP(b) STRIA_FOUR_REGIONS(STRIA_BELOW, b)
         STRIA_BLOCKS_DOWN_32(blocks)
 #undef STRIA_STEP
 #undef STRIA_BELOW
@@ -667,11 +670,7 @@ std::array<std::uint32_t, 4> fourAlikeBody(const std::array<const std::uint32_t*
         // Blocks pairs - 1 down to 0 by a jump into straight-line code, as
         // forBlocksDown, over 32 blocks (STRIA_BLOCKS_DOWN_32).
 #define STRIA_AT_LEAST(c, l, p, b) c = sub(c, add(atLeast(p + 32 * (b), l), atLeast(p + 32 * (b) + 16, l)))
-#define STRIA_STEP(b)                 \
-    STRIA_AT_LEAST(c0, l0, p0, b); \
-    STRIA_AT_LEAST(c1, l1, p1, b); \
-    STRIA_AT_LEAST(c2, l2, p2, b); \
-    STRIA_AT_LEAST(c3, l3, p3, b)
+#define STRIA_STEP(b) STRIA_FOUR_REGIONS(STRIA_AT_LEAST, b)
         STRIA_BLOCKS_DOWN_32(pairs)
 #undef STRIA_STEP
 #undef STRIA_AT_LEAST
@@ -716,6 +715,7 @@ std::array<std::uint32_t, 4> fourAlikeBody(const std::array<const std::uint32_t*
 }  // namespace stria::pipeline
 
 #undef STRIA_BLOCKS_OF_64
+#undef STRIA_FOUR_REGIONS
 #undef STRIA_BLOCKS_DOWN_64
 #undef STRIA_BLOCKS_DOWN_32
 #undef STRIA_DOWN_LAST8
