@@ -215,7 +215,7 @@ TEST(DecoderErrors, WrongPixelFormatIsNamed)
     EXPECT_NE(result.message().find("the decoder needs BGR8 or RGB8"), std::string::npos) << result.message();
 }
 
-TEST(DecoderErrors, PatternWiderThanProjectorAndSingularCrosstalkAreRefused)
+TEST(DecoderErrors, PatternWiderThanProjectorSingularCrosstalkAndTooWideCameraAreRefused)
 {
     const StripePattern wide = test::slidePattern(60);  // 480 columns
     const RigModel rig = test::slideRig(test::slidePattern(40), 48);  // projector 320 wide
@@ -228,6 +228,17 @@ TEST(DecoderErrors, PatternWiderThanProjectorAndSingularCrosstalkAreRefused)
     auto singular = Decoder::create(test::slidePattern(40), rig, params);
     ASSERT_FALSE(singular);
     EXPECT_NE(singular.message().find("crosstalk matrix is singular"), std::string::npos);
+
+    // The label rows' border lists hold 16-bit columns: a wider camera is
+    // refused before any workspace is allocated.
+    LensModel camera = rig.camera();
+    camera.width = 65537;
+    camera.K(0, 2) = (camera.width - 1) / 2.0;
+    const RigModel wideRig = RigModel::create(camera, rig.projector(), rig.R(), rig.T()).value();
+    auto wideCamera = Decoder::create(test::slidePattern(40), wideRig);
+    ASSERT_FALSE(wideCamera);
+    EXPECT_EQ(wideCamera.message(),
+              "the camera is 65537 pixels wide: the decoder supports at most 65536 (16-bit border columns)");
 }
 
 TEST(DecoderMemory, WorkspaceStaysUnder34BytesPerPixel)
