@@ -214,7 +214,7 @@ std::size_t graphTableEntries(std::size_t regions, std::size_t edges);
 // the traversal's seed keys and link pairs (2 entries per edge) and depth's
 // region stripes fit in the graph's share.
 std::size_t scratchEntries(int width, int height, int maxRegions, int maxEdges);
-// Plans the per-pixel buffers and the graph's (gradient and border masks,
+// Plans the per-pixel buffers and the graph's (gradient and border lists,
 // labels, the order buffer, scratch, regions, edges, edge features, incidence
 // lists) in ws.arena for ws.width x ws.height pixels, ws.maxRegions and
 // ws.maxEdges, and sets orderEntries: the one sizing that create() and the
