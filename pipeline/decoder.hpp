@@ -51,6 +51,19 @@ struct DecoderParams {
     // split it into a basin per pixel (docs/algorithm.md).
     int gradientFloor = 0;
     double noiseFloorFactor = 1.1;
+    // Segmentation on row pairs (the fast mode; docs/algorithm.md, "Row
+    // pairs"): the stages from the gradient to the traversal run on the frame
+    // averaged in pairs of rows (half the pixels, fewer superpixels), the
+    // sub-pixel edges and the triangulation still on every camera row, each
+    // reading its pair's labels. The stripes must run along the image
+    // columns (create() fails otherwise). The floor is then max(gradientFloor,
+    // round(rowPairNoiseFloorFactor * D) - 1, round(rowPairAlongFloorFactor *
+    // N2) - 1): D the median of max over the channels of |row 2y - row 2y + 1|
+    // (sampled pairs), N2 the row-pair frame's along-stripe gradient median,
+    // both interpolated within their histogram bins.
+    bool segmentRowPairs = false;
+    double rowPairNoiseFloorFactor = 0.55;
+    double rowPairAlongFloorFactor = 0.75;
     // Capacities (0 = derive from the camera size). When a frame needs more,
     // decode() decodes what fits and sets DecodeResult::truncated.
     int maxSuperpixels = 0;  // default: pixels / 16
@@ -120,6 +133,8 @@ public:
     const DecoderParams& params() const;
     // Superpixel label per pixel of the last decode (CV_32SC1 view into the
     // workspace, valid until the next decode()); for tests and debugging.
+    // With DecoderParams::segmentRowPairs, per pixel of the row-pair frame
+    // (camera row y is label row y / 2).
     cv::Mat labels() const;
     // Pattern stripe of superpixel `label` in the last decode (-1 = undecoded).
     int regionStripe(int label) const;

@@ -22,7 +22,7 @@ namespace {
 constexpr const char* kUsage = R"(usage:
   stria decode --calib CALIB.yaml --pattern PATTERN.yaml --image IN.png --ply OUT.ply
                [--depth OUT.tiff] [--preview OUT.png] [--stats] [--repeat N] [--ascii]
-               [--method graph|dp] [--raw-format bgr8|rgb8|yuyv --raw-size WxH]
+               [--method graph|dp] [--row-pairs] [--raw-format bgr8|rgb8|yuyv --raw-size WxH]
 
 Decodes one frame of the stripe pattern into a point cloud with the graph-based
 decoder (Schmalz & Angelopoulou). The image must have exactly the calibrated
@@ -35,7 +35,10 @@ written only if the whole decode succeeds, each atomically.
 --stats prints counts, workspace memory and per-stage times (median over
 --repeat N decodes of the same frame).
 --method dp decodes with the scanline DP baseline of Zhang et al. instead, for
-comparison (docs/evaluation.md); --stats then prints its points and total time.)";
+comparison (docs/evaluation.md); --stats then prints its points and total time.
+--row-pairs segments the frame averaged in pairs of rows (the fast mode of the
+graph decoder, docs/algorithm.md "Row pairs"; the edges are still located on
+every camera row); the board file's decoder.row_pairs sets it for scans.)";
 
 int run(std::span<const std::string> argv);
 const Command kDecode{"decode", "decode a camera frame into a point cloud", kUsage, run};
@@ -75,7 +78,7 @@ double median(std::vector<double> v)
 int run(std::span<const std::string> argv)
 {
     Args args(argv, {"calib", "pattern", "image", "ply", "depth", "preview", "repeat", "method", "raw-format", "raw-size"},
-              {"stats", "ascii"});
+              {"stats", "ascii", "row-pairs"});
     if (!args.ok()) return usageError(kDecode, args.error());
     if (!args.positional().empty()) return usageError(kDecode, "unexpected argument '" + args.positional()[0] + "'");
     if (!args.require({"calib", "pattern", "image", "ply"})) return usageError(kDecode, args.error());
@@ -85,6 +88,7 @@ int run(std::span<const std::string> argv)
     const std::string method = args.valueOr("method", "graph");
     if (method != "graph" && method != "dp")
         return usageError(kDecode, "--method '" + method + "' is not one of graph, dp");
+    if (method == "dp" && args.has("row-pairs")) return usageError(kDecode, "--row-pairs is for --method graph only");
     if (args.has("raw-format") != args.has("raw-size"))
         return usageError(kDecode, "--raw-format and --raw-size go together");
 
@@ -111,7 +115,9 @@ int run(std::span<const std::string> argv)
         if (!created) return failure("decode", created.message());
         dp = std::move(*created);
     } else {
-        auto created = pipeline::Decoder::create(*pattern, *rig);
+        pipeline::DecoderParams params;
+        params.segmentRowPairs = args.has("row-pairs");
+        auto created = pipeline::Decoder::create(*pattern, *rig, params);
         if (!created) return failure("decode", created.message());
         graph = std::move(*created);
     }

@@ -22,8 +22,53 @@ double millisecondsSince(Clock::time_point& start)
 
 std::string sizeName(int w, int h) { return std::to_string(w) + "x" + std::to_string(h); }
 
+// Row pairs (DecoderParams::segmentRowPairs): the label rows, (h + 1) / 2 of
+// them, then the averaged frame, 3 bytes a pixel, and 64 bytes that the
+// kernels' wide loads may read past its last pixel: within the labels
+// buffer's 4 bytes a camera pixel for every h >= 8.
+std::size_t pairRows(int h) { return static_cast<std::size_t>(h + 1) / 2; }
+std::size_t pairLabelEntries(int w, int h)
+{
+    const std::size_t pixels = static_cast<std::size_t>(w) * pairRows(h);
+    return pixels + (3 * pixels + 64 + sizeof(std::int32_t) - 1) / sizeof(std::int32_t);
+}
+
+// The frame averaged in pairs of rows, rounding up (rows 2y and 2y + 1, the
+// last row alone if h is odd): GCC vectorises the loop (pavgb, urhadd).
+FrameView averageRowPairs(DecoderWorkspace& ws, const FrameView& frame)
+{
+    const int bytes = 3 * frame.width, rows = static_cast<int>(pairRows(frame.height));
+    ws.pairNoise.fill(0);
+    for (int y = 0; y < rows; ++y) {
+        const std::uint8_t* a = frame.row(2 * y);
+        const std::uint8_t* b = frame.row(std::min(2 * y + 1, frame.height - 1));
+        std::uint8_t* out = ws.pairPixels + static_cast<std::ptrdiff_t>(y) * bytes;
+        for (int i = 0; i < bytes; ++i) out[i] = static_cast<std::uint8_t>((unsigned{a[i]} + unsigned{b[i]} + 1) >> 1);
+        if (y % kPairNoiseRowStep == 0 && 2 * y + 1 < frame.height)
+            for (int i = 0; i < bytes; i += 3) {
+                const int d0 = std::abs(a[i] - b[i]), d1 = std::abs(a[i + 1] - b[i + 1]), d2 = std::abs(a[i + 2] - b[i + 2]);
+                ++ws.pairNoise[static_cast<std::size_t>(std::max({d0, d1, d2}))];
+            }
+    }
+    return {ws.pairPixels, frame.width, rows, bytes, frame.format};
+}
+
+// The frame the stages up to the traversal segment: the camera's, or its row
+// pairs (averaged again only if `average`: the stage benchmarks repeat a
+// later stage on the pairs the gradient stage averaged).
+FrameView segmentationFrame(DecoderWorkspace& ws, const FrameView& frame, bool average)
+{
+    if (!ws.params.segmentRowPairs) return frame;
+    if (average) return averageRowPairs(ws, frame);
+    return {ws.pairPixels, frame.width, ws.height, 3 * static_cast<std::ptrdiff_t>(frame.width), frame.format};
+}
+
 Status validateParams(const DecoderParams& p)
 {
+    if (!(p.rowPairNoiseFloorFactor >= 0) || !(p.rowPairAlongFloorFactor >= 0))
+        return Status::error("decoder parameters rowPairNoiseFloorFactor and rowPairAlongFloorFactor are " +
+                             std::to_string(p.rowPairNoiseFloorFactor) + " and " +
+                             std::to_string(p.rowPairAlongFloorFactor) + ": they must be >= 0");
     if (!(p.t > 0 && p.t < 1)) return Status::error("decoder parameter t is " + std::to_string(p.t) + ": it must be in (0, 1)");
     if (!(p.alpha >= 0)) return Status::error("decoder parameter alpha is " + std::to_string(p.alpha) + ": it must be >= 0");
     if (!(p.A > 0)) return Status::error("decoder parameter A is " + std::to_string(p.A) + ": it must be > 0");
@@ -68,7 +113,7 @@ void reserveFrameBuffers(DecoderWorkspace& ws)
     WorkspaceArena& arena = ws.arena;
     // The gradient, then (from the regions to the depth stage) the border lists.
     arena.reserve(ws.gradient, std::max(n, sizeof(std::uint16_t) * borderPositionEntries(w, h)));
-    arena.reserve(ws.labels, n);
+    arena.reserve(ws.labels, ws.params.segmentRowPairs ? std::max(n, pairLabelEntries(w, h)) : n);
     ws.orderEntries = std::max<std::size_t>({watershedOrderEntries(w, h), regionOrderEntries(n, ws.maxRegions),
                                              graphTableEntries(ws.maxRegions, ws.maxEdges),
                                              sizeof(EdgeChange) / sizeof(std::int32_t) * ws.maxEdges});
@@ -94,6 +139,7 @@ std::size_t allocateWorkspace(DecoderWorkspace& ws)
 
 std::size_t allocateFrameBuffers(DecoderWorkspace& ws)
 {
+    ws.cameraHeight = ws.height;
     reserveFrameBuffers(ws);
     return allocateWorkspace(ws);
 }
@@ -128,6 +174,9 @@ Result<std::unique_ptr<Decoder>> Decoder::create(const StripePattern& pattern, c
     ws->height = h;
     ws->colorCorrection = cv::Matx33f(mixing.inv());
     ws->primary = primaryDirection(rig, pattern);
+    if (params.segmentRowPairs && std::abs(ws->primary[1]) > std::abs(ws->primary[0]))
+        return Status::error("decoder: segmentation on row pairs needs stripes along the image columns, but this rig's "
+                             "stripes run along the rows (its baseline is closer to the image's y axis)");
     ws->maxRegions = params.maxSuperpixels > 0 ? params.maxSuperpixels : std::max<int>(16, static_cast<int>(n / 16));
     ws->maxEdges = params.maxGraphEdges > 0 ? params.maxGraphEdges : 3 * ws->maxRegions;
     ws->maxPoints = params.maxPoints > 0 ? params.maxPoints : std::max<int>(16, static_cast<int>(n / 6));
@@ -151,6 +200,13 @@ Result<std::unique_ptr<Decoder>> Decoder::create(const StripePattern& pattern, c
     arena.reserve(ws->rayGrid, static_cast<std::size_t>(ws->rayGridWidth) * ws->rayGridHeight);
     std::size_t& bytes = ws->allocatedBytes;
     bytes = allocateWorkspace(*ws);
+    // Sized for the camera's rows above; the stages up to the traversal see the segmentation frame's.
+    ws->cameraHeight = h;
+    if (params.segmentRowPairs) {
+        ws->height = static_cast<int>(pairRows(h));
+        ws->labelRowShift = 1;
+        ws->pairPixels = reinterpret_cast<std::uint8_t*>(ws->labels.get() + static_cast<std::size_t>(w) * ws->height);
+    }
 
     setFirstStepSymbols(*ws);
     for (int k = 0; k < pattern.edgeCount(); ++k) ws->lightPlanes[k] = rig.lightPlaneForColumn(pattern.edgeColumn(k));
@@ -170,9 +226,9 @@ Status Decoder::checkFrame(const FrameView& frame) const
     if (frame.format != PixelFormat::Bgr8 && frame.format != PixelFormat::Rgb8)
         return Status::error(std::string("decode: the frame is ") + pixelFormatName(frame.format) +
                              ", the decoder needs BGR8 or RGB8");
-    if (frame.width != ws.width || frame.height != ws.height)
+    if (frame.width != ws.width || frame.height != ws.cameraHeight)
         return Status::error("decode: the frame is " + sizeName(frame.width, frame.height) +
-                             " but the camera is calibrated for " + sizeName(ws.width, ws.height));
+                             " but the camera is calibrated for " + sizeName(ws.width, ws.cameraHeight));
     if (frame.stride < 3 * static_cast<std::ptrdiff_t>(frame.width))
         return Status::error("decode: the frame's stride " + std::to_string(frame.stride) + " is below 3 x width");
     return Status::ok();
@@ -183,7 +239,6 @@ Result<DecodeResult> Decoder::decode(const FrameView& frame)
     DecoderWorkspace& ws = *ws_;
     lastFrame_ = {};
     if (Status status = checkFrame(frame); !status) return status;
-    ws.frame = frame;
     ws.rgbOffset = frame.format == PixelFormat::Bgr8 ? std::array<int, 3>{2, 1, 0} : std::array<int, 3>{0, 1, 2};
     ws.truncated = false;
 
@@ -191,6 +246,7 @@ Result<DecodeResult> Decoder::decode(const FrameView& frame)
     StageTimings& t = result.timings;
     const Clock::time_point begin = Clock::now();
     Clock::time_point lap = begin;
+    ws.frame = segmentationFrame(ws, frame, true);  // timed with the gradient
     computeGradient(ws);
     t.gradientMs = millisecondsSince(lap);
     computeWatershed(ws);
@@ -203,6 +259,7 @@ Result<DecodeResult> Decoder::decode(const FrameView& frame)
     t.edgesMs = millisecondsSince(lap);
     decodeStripes(ws);
     t.decodeMs = millisecondsSince(lap);
+    ws.frame = frame;
     computePoints(ws);
     t.depthMs = millisecondsSince(lap);
     t.totalMs = std::chrono::duration<double, std::milli>(lap - begin).count();
@@ -224,7 +281,7 @@ Status Decoder::repeatStage(DecoderStage stage, const FrameView& frame)
         frame.stride != lastFrame_.stride || frame.format != lastFrame_.format)
         return Status::error("repeatStage: the frame is not the one the last decode() decoded");
     DecoderWorkspace& ws = *ws_;
-    ws.frame = frame;
+    ws.frame = stage == DecoderStage::Depth ? frame : segmentationFrame(ws, frame, stage == DecoderStage::Gradient);
     switch (stage) {
     case DecoderStage::Gradient: computeGradient(ws); break;
     case DecoderStage::Watershed: computeWatershed(ws); break;
@@ -255,15 +312,15 @@ const char* decoderStageName(DecoderStage stage)
 void Decoder::fillDepthMap(cv::Mat& depth) const
 {
     const DecoderWorkspace& ws = *ws_;
-    depth.create(ws.height, ws.width, CV_32FC1);
-    for (int y = 0; y < ws.height; ++y) {
+    depth.create(ws.cameraHeight, ws.width, CV_32FC1);
+    for (int y = 0; y < ws.cameraHeight; ++y) {
         float* row = depth.ptr<float>(y);
         std::fill(row, row + ws.width, std::numeric_limits<float>::quiet_NaN());
     }
     for (int i = 0; i < ws.pointCount; ++i) {
         const ScanPoint& p = ws.points[i];
         const int x = static_cast<int>(std::lround(p.pixel.x)), y = static_cast<int>(std::lround(p.pixel.y));
-        if (x >= 0 && x < ws.width && y >= 0 && y < ws.height) depth.at<float>(y, x) = p.position[2];
+        if (x >= 0 && x < ws.width && y >= 0 && y < ws.cameraHeight) depth.at<float>(y, x) = p.position[2];
     }
 }
 

@@ -421,7 +421,8 @@ bool pointsOfBatch(DecoderWorkspace& ws, const RowRays& rays, const double* colu
 // (no FMA: -ffp-contract=off; golden frames identical from each clone).
 STRIA_X86_CLONES void computePoints(DecoderWorkspace& ws)
 {
-    const int w = ws.width, h = ws.height;
+    // Camera rows; row y's labels and borders are label row y >> shift (row pairs: y / 2).
+    const int w = ws.width, h = ws.cameraHeight, shift = ws.labelRowShift;
     const Region* regions = ws.regions.get();
     const std::int32_t* labels = ws.labels.get();
     const cv::Matx33f& m = ws.colorCorrection;
@@ -465,14 +466,14 @@ STRIA_X86_CLONES void computePoints(DecoderWorkspace& ws)
     const unsigned peakLimit = static_cast<unsigned>(w - 2 - 2 * kSearchRadius);
     for (int y = 0; y < h; ++y) {
         const float rowV = static_cast<float>(y);
-        const std::int32_t* label = labels + static_cast<std::ptrdiff_t>(y) * w;
+        const std::int32_t* label = labels + static_cast<std::ptrdiff_t>(y >> shift) * w;
         const std::uint8_t* row = ws.frame.row(y);
         const RowRays rays(ws, y);
         // The row's borders from the regions stage's list (in increasing
         // order); the reference is a walk of its masks (borderMask) by
         // a loop per 64-bit word, whose exit was mispredicted on most words.
-        const std::uint16_t* border = ws.borderPositions + ws.borderStarts[y];
-        const std::uint16_t* const bordersEnd = ws.borderPositions + ws.borderStarts[y + 1];
+        const std::uint16_t* border = ws.borderPositions + ws.borderStarts[y >> shift];
+        const std::uint16_t* const bordersEnd = ws.borderPositions + ws.borderStarts[(y >> shift) + 1];
         std::fill(rowPoint, rowPoint + edgeCount, -1);
         // The next row's pixels and labels on their way to the cache while
         // this row is located: the windows read most of a row's cache lines
@@ -488,7 +489,7 @@ STRIA_X86_CLONES void computePoints(DecoderWorkspace& ws)
         // buffers' ends in the last row), harmless for a prefetch, not for
         // a pointer.
         if (y + 1 < h) {
-            const std::uintptr_t nextLabels = reinterpret_cast<std::uintptr_t>(label + w);
+            const std::uintptr_t nextLabels = reinterpret_cast<std::uintptr_t>(labels + static_cast<std::ptrdiff_t>((y + 1) >> shift) * w);
             const std::uintptr_t nextPixels = reinterpret_cast<std::uintptr_t>(ws.frame.row(y + 1));
             for (std::uintptr_t b = 0, p = 0; b < 4u * static_cast<unsigned>(w); b += 512, p += 384) {
                 for (int k = 0; k < 8; ++k) __builtin_prefetch(reinterpret_cast<const void*>(nextLabels + b + 64 * k));

@@ -16,6 +16,41 @@
 #include <cstdlib>
 
 namespace stria::pipeline {
+namespace {
+
+// The median of a histogram of `count` values, interpolated within its bin
+// [m - 0.5, m + 0.5) by the share of the bin's values below the middle one.
+double interpolatedMedian(const std::array<int, 256>& histogram, int count)
+{
+    int m = 0, below = 0;
+    while (m < 255 && 2 * (below + histogram[m]) < count) below += histogram[m++];
+    return m - 0.5 + (0.5 * count - below) / std::max(histogram[m], 1);
+}
+
+// The row-pair frame's floor (DecoderParams::segmentRowPairs): the larger of
+// two, each round(factor x measure) - 1 on an interpolated median (the
+// integer median's steps were too coarse at this scale):
+// - the noise: the camera rows' pair differences (ws.pairNoise), which the
+//   texture hardly reaches (one row apart); alone it let the coloured relief
+//   at 780x580 split into 8 802 superpixels (7 023 on the camera's rows),
+//   so the decode was hardly faster;
+// - the along-stripe gradient median of the row-pair frame, which the
+//   full-rate decode uses (times 1.1) and which flattens texture as well, but
+//   which the doubled row step raises (4.6 where the camera rows had 3 on
+//   the low-contrast photo, whose stripes it then merged).
+// docs/algorithm.md, "Row pairs", has the measurements behind the factors.
+int rowPairFloor(const std::array<int, 256>& pairNoise, const std::array<int, 256>& along, int pixels,
+                 const DecoderParams& params)
+{
+    int samples = 0;
+    for (const int c : pairNoise) samples += c;
+    const double noise = interpolatedMedian(pairNoise, samples), gradient = interpolatedMedian(along, pixels);
+    return std::max(static_cast<int>(std::lround(params.rowPairNoiseFloorFactor * noise)),
+                    static_cast<int>(std::lround(params.rowPairAlongFloorFactor * gradient))) -
+           1;
+}
+
+}  // namespace
 
 // (x86-64: clones for AVX2 and AVX-512 too, STRIA_X86_CLONES: the floor's
 // select below in 32 or 64 bytes per step.)
@@ -37,8 +72,9 @@ STRIA_X86_CLONES void computeGradient(DecoderWorkspace& ws)
     int median = 0;
     for (int seen = along[0]; 2 * seen < n; seen += along[++median]) {
     }
-    const int floor = std::max(ws.params.gradientFloor,
-                               static_cast<int>(std::lround(ws.params.noiseFloorFactor * median)) - 1);
+    int floor = static_cast<int>(std::lround(ws.params.noiseFloorFactor * median)) - 1;
+    if (ws.params.segmentRowPairs) floor = rowPairFloor(ws.pairNoise, along, n, ws.params);
+    floor = std::max(ws.params.gradientFloor, floor);
     // A select on bytes rather than a branch: the compiler vectorises it.
     const std::uint8_t byteFloor = static_cast<std::uint8_t>(std::clamp(floor, 0, 255));
     std::uint8_t* g = ws.gradient.get();

@@ -94,7 +94,22 @@ struct DecoderWorkspace {
 
     StripePattern pattern;
     DecoderParams params;
+    // The segmentation frame's size: the camera's, or with
+    // params.segmentRowPairs its row pairs' (height (cameraHeight + 1) / 2);
+    // the stages up to the traversal see only it. The depth stage works on
+    // the camera's rows, camera row y reading label row y >> labelRowShift.
     int width = 0, height = 0;
+    int cameraHeight = 0, labelRowShift = 0;
+    // With params.segmentRowPairs: the frame averaged in row pairs (BGR or
+    // RGB as the input, stride 3 x width), in the labels buffer past the
+    // label rows, which then fill (at most) its first half.
+    std::uint8_t* pairPixels = nullptr;
+    // With params.segmentRowPairs: the noise measure the gradient's floor
+    // uses instead of the row-pair gradient's median (which the texture
+    // along the stripes raises, two camera rows a step): a histogram of
+    // max over the channels of |row 2y - row 2y + 1| on every
+    // kPairNoiseRowStep-th pair (decoder.cpp, averageRowPairs).
+    std::array<int, 256> pairNoise{};
     cv::Matx33f colorCorrection;  // inverse of params.crosstalk (R G B)
     cv::Vec2f primary{1, 0};      // unit image direction of increasing projector column (epipolar)
 
@@ -184,6 +199,7 @@ struct DecoderWorkspace {
 // columns 0 to width - 2) and the kBorderGroup junk entries appendBitPositions
 // may write past the last. uint16 columns: widths up to 65536.
 inline constexpr int kBorderGroup = 16;
+inline constexpr int kPairNoiseRowStep = 16;
 inline std::size_t borderPositionEntries(int width, int height)
 {
     return static_cast<std::size_t>(std::max(width - 1, 0)) * static_cast<std::size_t>(height) + kBorderGroup;

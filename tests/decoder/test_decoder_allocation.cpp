@@ -16,7 +16,19 @@
 namespace stria {
 namespace {
 
-TEST(DecoderAllocation, DecodingFramesTwoToNAllocatesNothing)
+// Each test below for both segmentations: the camera's rows and row pairs
+// (DecoderParams::segmentRowPairs), whose averaged frame lives in the workspace.
+class DecoderAllocation : public ::testing::TestWithParam<bool> {
+protected:
+    static pipeline::DecoderParams params()
+    {
+        pipeline::DecoderParams p;
+        p.segmentRowPairs = GetParam();
+        return p;
+    }
+};
+
+TEST_P(DecoderAllocation, DecodingFramesTwoToNAllocatesNothing)
 {
     if (!test::kCountingAllocations) GTEST_SKIP() << "sanitizer build: the allocator is the sanitizer's";
     const hal::sim::SimRig rig = hal::sim::desktopRig();
@@ -29,7 +41,7 @@ TEST(DecoderAllocation, DecodingFramesTwoToNAllocatesNothing)
         settings.seed = 10 + i;
         ASSERT_TRUE(renderer.render(scene, settings, frames[i]));
     }
-    auto decoder = pipeline::Decoder::create(rig.pattern, rig.rig);
+    auto decoder = pipeline::Decoder::create(rig.pattern, rig.rig, params());
     ASSERT_TRUE(decoder);
     cv::Mat depth(frames[0].image.rows, frames[0].image.cols, CV_32FC1);
     auto view = [](const cv::Mat& m) {
@@ -57,7 +69,7 @@ TEST(DecoderAllocation, DecodingFramesTwoToNAllocatesNothing)
 // The stages up to each one, that one twice (it must not spoil its own
 // inputs), then the later ones: the points must be the decode's, byte for
 // byte.
-TEST(DecoderAllocation, RepeatingAStageRedoesItsWorkAndAllocatesNothing)
+TEST_P(DecoderAllocation, RepeatingAStageRedoesItsWorkAndAllocatesNothing)
 {
     const hal::sim::SimRig rig = hal::sim::desktopRig();
     const hal::sim::Scene scene =
@@ -68,7 +80,7 @@ TEST(DecoderAllocation, RepeatingAStageRedoesItsWorkAndAllocatesNothing)
     ASSERT_TRUE(hal::sim::SceneRenderer(rig).render(scene, settings, frame));
     const cv::Mat& image = frame.image;
     const FrameView view{image.data, image.cols, image.rows, static_cast<std::ptrdiff_t>(image.step), PixelFormat::Bgr8};
-    auto decoder = pipeline::Decoder::create(rig.pattern, rig.rig);
+    auto decoder = pipeline::Decoder::create(rig.pattern, rig.rig, params());
     ASSERT_TRUE(decoder);
 
     const Status early = (*decoder)->repeatStage(pipeline::DecoderStage::Graph, view);
@@ -108,14 +120,21 @@ TEST(DecoderAllocation, RepeatingAStageRedoesItsWorkAndAllocatesNothing)
     }
 }
 
-TEST(DecoderAllocation, WorkspaceOfTheDesktopRigIsUnder34BytesPerPixel)
+TEST_P(DecoderAllocation, WorkspaceOfTheDesktopRigIsUnder34BytesPerPixel)
 {
     const hal::sim::SimRig rig = hal::sim::desktopRig();
-    auto decoder = pipeline::Decoder::create(rig.pattern, rig.rig);
+    auto decoder = pipeline::Decoder::create(rig.pattern, rig.rig, params());
     ASSERT_TRUE(decoder);
     const double pixels = static_cast<double>(rig.rig.camera().width) * rig.rig.camera().height;
     EXPECT_LT(static_cast<double>((*decoder)->workspaceBytes()) / pixels, 34.0);
+    // Row pairs cost no memory: the averaged frame fits in the labels buffer past the label rows.
+    auto fullRows = pipeline::Decoder::create(rig.pattern, rig.rig);
+    ASSERT_TRUE(fullRows);
+    EXPECT_EQ((*decoder)->workspaceBytes(), (*fullRows)->workspaceBytes());
 }
+
+INSTANTIATE_TEST_SUITE_P(Segmentation, DecoderAllocation, ::testing::Bool(),
+                         [](const ::testing::TestParamInfo<bool>& info) { return info.param ? "RowPairs" : "FullRows"; });
 
 }  // namespace
 }  // namespace stria

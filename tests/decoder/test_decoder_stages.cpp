@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 #include <opencv2/imgproc.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <vector>
 
@@ -93,6 +94,46 @@ TEST(DecoderStages, CleanSlideGivesOneSuperpixelPerStripeAndEveryStripeDecoded)
     }
     EXPECT_LT(worst, 1e-4);
     EXPECT_LT(worstDepth, 1e-3);  // mm: the plane the slide rig sees
+}
+
+// Row pairs (DecoderParams::segmentRowPairs): the labels have half the rows
+// (rounded up: an odd last row is a pair of its own), the points every camera
+// row, on the same exact columns; a strided view gives the same points.
+TEST(DecoderStages, RowPairsSegmentHalfTheRowsAndLocateEveryRow)
+{
+    for (const int rows : {48, 47}) {
+        const StripePattern pattern = test::slidePattern();
+        const RigModel rig = test::slideRig(pattern, rows);
+        const cv::Mat slide = pattern.renderSlide(pattern.projectorColumnsUsed(), rows);
+        DecoderParams params;
+        params.segmentRowPairs = true;
+        auto decoder = Decoder::create(pattern, rig, params);
+        ASSERT_TRUE(decoder) << decoder.message();
+        auto result = (*decoder)->decode(viewOf(slide));
+        ASSERT_TRUE(result) << result.message();
+        EXPECT_EQ(result->superpixels, pattern.stripeCount()) << rows;
+        EXPECT_EQ(result->decodedRegions, pattern.stripeCount()) << rows;
+        const cv::Mat labels = (*decoder)->labels();
+        EXPECT_EQ(labels.rows, (rows + 1) / 2);
+        EXPECT_EQ(labels.cols, slide.cols);
+        ASSERT_EQ(result->points.size(), static_cast<std::size_t>(pattern.edgeCount() * rows)) << rows;
+        std::vector<int> perRow(static_cast<std::size_t>(rows), 0);
+        double worst = 0;
+        for (const ScanPoint& p : result->points) {
+            worst = std::max(worst, std::abs(p.pixel.x - pattern.edgeColumn(p.edge)));
+            ++perRow[static_cast<std::size_t>(std::lround(p.pixel.y))];
+        }
+        EXPECT_LT(worst, 1e-4) << rows;
+        EXPECT_EQ(*std::min_element(perRow.begin(), perRow.end()), pattern.edgeCount()) << rows;
+        const std::vector<ScanPoint> expected(result->points.begin(), result->points.end());
+
+        cv::Mat wide(slide.rows, slide.cols + 37, CV_8UC3, cv::Scalar(0, 0, 255));
+        slide.copyTo(wide.colRange(0, slide.cols));
+        auto strided = (*decoder)->decode(viewOf(wide.colRange(0, slide.cols)));
+        ASSERT_TRUE(strided);
+        ASSERT_EQ(strided->points.size(), expected.size());
+        for (std::size_t i = 0; i < expected.size(); ++i) EXPECT_EQ(strided->points[i].pixel, expected[i].pixel);
+    }
 }
 
 TEST(DecoderStages, RgbFramesDecodeLikeBgr)
@@ -239,6 +280,28 @@ TEST(DecoderErrors, PatternWiderThanProjectorSingularCrosstalkAndTooWideCameraAr
     ASSERT_FALSE(wideCamera);
     EXPECT_EQ(wideCamera.message(),
               "the camera is 65537 pixels wide: the decoder supports at most 65536 (16-bit border columns)");
+}
+
+TEST(DecoderErrors, RowPairsNeedStripesAlongTheColumns)
+{
+    // The projector above the camera: the stripes run along the image rows,
+    // which pairs of rows would blur together.
+    const StripePattern pattern = test::slidePattern();
+    const RigModel horizontal = test::slideRig(pattern, 48);
+    const RigModel vertical =
+        RigModel::create(horizontal.camera(), horizontal.projector(), cv::Matx33d::eye(), cv::Vec3d(0, -100, 0)).value();
+    DecoderParams params;
+    params.segmentRowPairs = true;
+    auto refused = Decoder::create(pattern, vertical, params);
+    ASSERT_FALSE(refused);
+    EXPECT_EQ(refused.message(), "decoder: segmentation on row pairs needs stripes along the image columns, but this "
+                                 "rig's stripes run along the rows (its baseline is closer to the image's y axis)");
+    EXPECT_TRUE(Decoder::create(pattern, vertical));  // the camera's rows segment either way
+
+    params.rowPairNoiseFloorFactor = -1;
+    auto negative = Decoder::create(pattern, horizontal, params);
+    ASSERT_FALSE(negative);
+    EXPECT_NE(negative.message().find("rowPairNoiseFloorFactor"), std::string::npos) << negative.message();
 }
 
 TEST(DecoderMemory, WorkspaceStaysUnder34BytesPerPixel)
