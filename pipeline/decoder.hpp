@@ -55,15 +55,10 @@ struct DecoderParams {
     // pairs"): the stages from the gradient to the traversal run on the frame
     // averaged in pairs of rows (half the pixels, fewer superpixels), the
     // sub-pixel edges and the triangulation still on every camera row, each
-    // reading its pair's labels. The stripes must run along the image
-    // columns (create() fails otherwise). The floor is then max(gradientFloor,
-    // round(rowPairNoiseFloorFactor * D) - 1, round(rowPairAlongFloorFactor *
-    // N2) - 1): D the median of max over the channels of |row 2y - row 2y + 1|
-    // (sampled pairs), N2 the row-pair frame's along-stripe gradient median,
-    // both interpolated within their histogram bins.
+    // reading its pair's labels. The floor above is the camera rows' (N
+    // measured on every 8th camera row). The stripes must run along the
+    // image columns (create() fails otherwise).
     bool segmentRowPairs = false;
-    double rowPairNoiseFloorFactor = 0.55;
-    double rowPairAlongFloorFactor = 0.75;
     // Capacities (0 = derive from the camera size). When a frame needs more,
     // decode() decodes what fits and sets DecodeResult::truncated.
     int maxSuperpixels = 0;  // default: pixels / 16

@@ -175,6 +175,8 @@ Result<BoardConfig> parseBoard(const std::string& text, const std::string& sourc
     decoder.integer("min_component_regions", p.minComponentRegions, 0, 1000000);
     decoder.number("null_edge_ratio", p.nullEdgeRatio, 0, 1);
     decoder.integer("gradient_floor", p.gradientFloor, 0, 255);
+    decoder.number("noise_floor_factor", p.noiseFloorFactor, 0, 10);
+    decoder.flag("row_pairs", p.segmentRowPairs);
     decoder.integer("max_superpixels", p.maxSuperpixels, 0, 1 << 26);
     decoder.integer("max_graph_edges", p.maxGraphEdges, 0, 1 << 28);
     decoder.integer("max_points", p.maxPoints, 0, 1 << 28);

@@ -35,20 +35,14 @@ std::size_t pairLabelEntries(int w, int h)
 
 // The frame averaged in pairs of rows, rounding up (rows 2y and 2y + 1, the
 // last row alone if h is odd): GCC vectorises the loop (pavgb, urhadd).
-FrameView averageRowPairs(DecoderWorkspace& ws, const FrameView& frame)
+FrameView averageRowPairs(const DecoderWorkspace& ws, const FrameView& frame)
 {
     const int bytes = 3 * frame.width, rows = static_cast<int>(pairRows(frame.height));
-    ws.pairNoise.fill(0);
     for (int y = 0; y < rows; ++y) {
         const std::uint8_t* a = frame.row(2 * y);
         const std::uint8_t* b = frame.row(std::min(2 * y + 1, frame.height - 1));
         std::uint8_t* out = ws.pairPixels + static_cast<std::ptrdiff_t>(y) * bytes;
         for (int i = 0; i < bytes; ++i) out[i] = static_cast<std::uint8_t>((unsigned{a[i]} + unsigned{b[i]} + 1) >> 1);
-        if (y % kPairNoiseRowStep == 0 && 2 * y + 1 < frame.height)
-            for (int i = 0; i < bytes; i += 3) {
-                const int d0 = std::abs(a[i] - b[i]), d1 = std::abs(a[i + 1] - b[i + 1]), d2 = std::abs(a[i + 2] - b[i + 2]);
-                ++ws.pairNoise[static_cast<std::size_t>(std::max({d0, d1, d2}))];
-            }
     }
     return {ws.pairPixels, frame.width, rows, bytes, frame.format};
 }
@@ -56,7 +50,7 @@ FrameView averageRowPairs(DecoderWorkspace& ws, const FrameView& frame)
 // The frame the stages up to the traversal segment: the camera's, or its row
 // pairs (averaged again only if `average`: the stage benchmarks repeat a
 // later stage on the pairs the gradient stage averaged).
-FrameView segmentationFrame(DecoderWorkspace& ws, const FrameView& frame, bool average)
+FrameView segmentationFrame(const DecoderWorkspace& ws, const FrameView& frame, bool average)
 {
     if (!ws.params.segmentRowPairs) return frame;
     if (average) return averageRowPairs(ws, frame);
@@ -65,10 +59,6 @@ FrameView segmentationFrame(DecoderWorkspace& ws, const FrameView& frame, bool a
 
 Status validateParams(const DecoderParams& p)
 {
-    if (!(p.rowPairNoiseFloorFactor >= 0) || !(p.rowPairAlongFloorFactor >= 0))
-        return Status::error("decoder parameters rowPairNoiseFloorFactor and rowPairAlongFloorFactor are " +
-                             std::to_string(p.rowPairNoiseFloorFactor) + " and " +
-                             std::to_string(p.rowPairAlongFloorFactor) + ": they must be >= 0");
     if (!(p.t > 0 && p.t < 1)) return Status::error("decoder parameter t is " + std::to_string(p.t) + ": it must be in (0, 1)");
     if (!(p.alpha >= 0)) return Status::error("decoder parameter alpha is " + std::to_string(p.alpha) + ": it must be >= 0");
     if (!(p.A > 0)) return Status::error("decoder parameter A is " + std::to_string(p.A) + ": it must be > 0");
@@ -111,8 +101,10 @@ void reserveFrameBuffers(DecoderWorkspace& ws)
     const int w = ws.width, h = ws.height;
     const std::size_t n = static_cast<std::size_t>(w) * h;
     WorkspaceArena& arena = ws.arena;
-    // The gradient, then (from the regions to the depth stage) the border lists.
-    arena.reserve(ws.gradient, std::max(n, sizeof(std::uint16_t) * borderPositionEntries(w, h)));
+    // The gradient, then (from the regions to the depth stage) the border
+    // lists; with row pairs, one camera row's magnitudes past the pair rows' (gradient.cpp).
+    arena.reserve(ws.gradient, std::max({n, static_cast<std::size_t>(w) * (pairRows(h) + 1),
+                                         sizeof(std::uint16_t) * borderPositionEntries(w, h)}));
     arena.reserve(ws.labels, ws.params.segmentRowPairs ? std::max(n, pairLabelEntries(w, h)) : n);
     ws.orderEntries = std::max<std::size_t>({watershedOrderEntries(w, h), regionOrderEntries(n, ws.maxRegions),
                                              graphTableEntries(ws.maxRegions, ws.maxEdges),
@@ -239,6 +231,7 @@ Result<DecodeResult> Decoder::decode(const FrameView& frame)
     DecoderWorkspace& ws = *ws_;
     lastFrame_ = {};
     if (Status status = checkFrame(frame); !status) return status;
+    ws.cameraFrame = frame;
     ws.rgbOffset = frame.format == PixelFormat::Bgr8 ? std::array<int, 3>{2, 1, 0} : std::array<int, 3>{0, 1, 2};
     ws.truncated = false;
 
@@ -269,7 +262,7 @@ Result<DecodeResult> Decoder::decode(const FrameView& frame)
     result.graphEdges = ws.edgeCount;
     result.decodedRegions = ws.decodedRegions;
     result.truncated = ws.truncated;
-    ws.frame = {};
+    ws.frame = ws.cameraFrame = {};
     lastFrame_ = frame;
     return result;
 }
@@ -281,6 +274,7 @@ Status Decoder::repeatStage(DecoderStage stage, const FrameView& frame)
         frame.stride != lastFrame_.stride || frame.format != lastFrame_.format)
         return Status::error("repeatStage: the frame is not the one the last decode() decoded");
     DecoderWorkspace& ws = *ws_;
+    ws.cameraFrame = frame;
     ws.frame = stage == DecoderStage::Depth ? frame : segmentationFrame(ws, frame, stage == DecoderStage::Gradient);
     switch (stage) {
     case DecoderStage::Gradient: computeGradient(ws); break;
@@ -291,7 +285,7 @@ Status Decoder::repeatStage(DecoderStage stage, const FrameView& frame)
     case DecoderStage::Traversal: decodeStripes(ws); break;
     case DecoderStage::Depth: computePoints(ws); break;
     }
-    ws.frame = {};
+    ws.frame = ws.cameraFrame = {};
     return Status::ok();
 }
 

@@ -16,41 +16,6 @@
 #include <cstdlib>
 
 namespace stria::pipeline {
-namespace {
-
-// The median of a histogram of `count` values, interpolated within its bin
-// [m - 0.5, m + 0.5) by the share of the bin's values below the middle one.
-double interpolatedMedian(const std::array<int, 256>& histogram, int count)
-{
-    int m = 0, below = 0;
-    while (m < 255 && 2 * (below + histogram[m]) < count) below += histogram[m++];
-    return m - 0.5 + (0.5 * count - below) / std::max(histogram[m], 1);
-}
-
-// The row-pair frame's floor (DecoderParams::segmentRowPairs): the larger of
-// two, each round(factor x measure) - 1 on an interpolated median (the
-// integer median's steps were too coarse at this scale):
-// - the noise: the camera rows' pair differences (ws.pairNoise), which the
-//   texture hardly reaches (one row apart); alone it let the coloured relief
-//   at 780x580 split into 8 802 superpixels (7 023 on the camera's rows),
-//   so the decode was hardly faster;
-// - the along-stripe gradient median of the row-pair frame, which the
-//   full-rate decode uses (times 1.1) and which flattens texture as well, but
-//   which the doubled row step raises (4.6 where the camera rows had 3 on
-//   the low-contrast photo, whose stripes it then merged).
-// docs/algorithm.md, "Row pairs", has the measurements behind the factors.
-int rowPairFloor(const std::array<int, 256>& pairNoise, const std::array<int, 256>& along, int pixels,
-                 const DecoderParams& params)
-{
-    int samples = 0;
-    for (const int c : pairNoise) samples += c;
-    const double noise = interpolatedMedian(pairNoise, samples), gradient = interpolatedMedian(along, pixels);
-    return std::max(static_cast<int>(std::lround(params.rowPairNoiseFloorFactor * noise)),
-                    static_cast<int>(std::lround(params.rowPairAlongFloorFactor * gradient))) -
-           1;
-}
-
-}  // namespace
 
 // (x86-64: clones for AVX2 and AVX-512 too, STRIA_X86_CLONES: the floor's
 // select below in 32 or 64 bytes per step.)
@@ -65,18 +30,33 @@ STRIA_X86_CLONES void computeGradient(DecoderWorkspace& ws)
     for (int y = 0; y < h; ++y)
         gradientRow(ws.frame.row(std::max(y - 1, 0)), ws.frame.row(y), ws.frame.row(std::min(y + 1, h - 1)), w, alongY,
                     ws.gradient.get() + static_cast<std::ptrdiff_t>(y) * w, alongCounts, lanes);
+    // Row pairs (DecoderParams::segmentRowPairs): the floor the camera's
+    // rows would have, from their along-stripe gradient on every
+    // kFloorRowStep-th camera row (the rows' magnitudes into the gradient
+    // buffer past the pair rows, then ignored). The row-pair frame's own
+    // median is no noise measure: its along-stripe step spans 4 camera
+    // rows, so texture and shading raise it (relief 5.7 -> 7.5, tube 6.4 ->
+    // 12.6) while the averaging lowers the noise (docs/algorithm.md, "Row pairs").
+    int samples = w * h;
+    if (ws.params.segmentRowPairs) {
+        const FrameView& camera = ws.cameraFrame;
+        alongCounts = {};
+        samples = 0;
+        for (int y = 1; y + 1 < camera.height; y += kFloorRowStep, samples += w)
+            gradientRow(camera.row(y - 1), camera.row(y), camera.row(y + 1), w, alongY,
+                        ws.gradient.get() + static_cast<std::ptrdiff_t>(h) * w, alongCounts, lanes);
+    }
     std::array<int, 256> along;
     for (int l = 0; l < 256; ++l) along[l] = alongCounts[0][l] + alongCounts[1][l] + alongCounts[2][l] + alongCounts[3][l];
 
-    const int n = w * h;
     int median = 0;
-    for (int seen = along[0]; 2 * seen < n; seen += along[++median]) {
+    for (int seen = along[0]; 2 * seen < samples; seen += along[++median]) {
     }
-    int floor = static_cast<int>(std::lround(ws.params.noiseFloorFactor * median)) - 1;
-    if (ws.params.segmentRowPairs) floor = rowPairFloor(ws.pairNoise, along, n, ws.params);
-    floor = std::max(ws.params.gradientFloor, floor);
+    const int floor = std::max(ws.params.gradientFloor,
+                               static_cast<int>(std::lround(ws.params.noiseFloorFactor * median)) - 1);
     // A select on bytes rather than a branch: the compiler vectorises it.
     const std::uint8_t byteFloor = static_cast<std::uint8_t>(std::clamp(floor, 0, 255));
+    const int n = w * h;
     std::uint8_t* g = ws.gradient.get();
     for (int p = 0; p < n; ++p) g[p] = g[p] > byteFloor ? g[p] : 0;
 }

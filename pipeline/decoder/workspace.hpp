@@ -104,12 +104,6 @@ struct DecoderWorkspace {
     // RGB as the input, stride 3 x width), in the labels buffer past the
     // label rows, which then fill (at most) its first half.
     std::uint8_t* pairPixels = nullptr;
-    // With params.segmentRowPairs: the noise measure the gradient's floor
-    // uses instead of the row-pair gradient's median (which the texture
-    // along the stripes raises, two camera rows a step): a histogram of
-    // max over the channels of |row 2y - row 2y + 1| on every
-    // kPairNoiseRowStep-th pair (decoder.cpp, averageRowPairs).
-    std::array<int, 256> pairNoise{};
     cv::Matx33f colorCorrection;  // inverse of params.crosstalk (R G B)
     cv::Vec2f primary{1, 0};      // unit image direction of increasing projector column (epipolar)
 
@@ -189,7 +183,8 @@ struct DecoderWorkspace {
     // Per-frame counts.
     int regionCount = 0, edgeCount = 0, pointCount = 0, passCount = 0, decodedRegions = 0;
     bool truncated = false;
-    FrameView frame;
+    FrameView frame;        // the frame the current stage works on: the camera's or its row pairs
+    FrameView cameraFrame;  // the camera's frame (decode() and repeatStage())
     std::array<int, 3> rgbOffset{2, 1, 0};  // byte offset of R, G, B within a pixel
 
     std::size_t allocatedBytes = 0;  // by create(): Decoder::workspaceBytes()
@@ -199,7 +194,8 @@ struct DecoderWorkspace {
 // columns 0 to width - 2) and the kBorderGroup junk entries appendBitPositions
 // may write past the last. uint16 columns: widths up to 65536.
 inline constexpr int kBorderGroup = 16;
-inline constexpr int kPairNoiseRowStep = 16;
+// With row pairs, the gradient's floor is measured on every kFloorRowStep-th camera row (gradient.cpp).
+inline constexpr int kFloorRowStep = 8;
 inline std::size_t borderPositionEntries(int width, int height)
 {
     return static_cast<std::size_t>(std::max(width - 1, 0)) * static_cast<std::size_t>(height) + kBorderGroup;

@@ -77,9 +77,10 @@ const BenchFrame* frameOrSkip(benchmark::State& state, FrameSize size)
 }
 
 // The decoder for the frame's rig, or null (the benchmark reports the error).
-std::unique_ptr<pipeline::Decoder> decoderOrSkip(benchmark::State& state, const BenchFrame& frame)
+std::unique_ptr<pipeline::Decoder> decoderOrSkip(benchmark::State& state, const BenchFrame& frame,
+                                                 const pipeline::DecoderParams& params = {})
 {
-    auto decoder = pipeline::Decoder::create(frame.rig.pattern, frame.rig.rig);
+    auto decoder = pipeline::Decoder::create(frame.rig.pattern, frame.rig.rig, params);
     if (!decoder) {
         state.SkipWithError(decoder.message().c_str());
         return nullptr;
@@ -87,10 +88,13 @@ std::unique_ptr<pipeline::Decoder> decoderOrSkip(benchmark::State& state, const 
     return std::move(*decoder);
 }
 
-void decode(benchmark::State& state, FrameSize size)
+// rowPairs: DecoderParams::segmentRowPairs (the fast mode), `decode_rowpairs/<size>`.
+void decode(benchmark::State& state, FrameSize size, bool rowPairs)
 {
     const BenchFrame* frame = frameOrSkip(state, size);
-    std::unique_ptr<pipeline::Decoder> decoder = frame ? decoderOrSkip(state, *frame) : nullptr;
+    pipeline::DecoderParams params;
+    params.segmentRowPairs = rowPairs;
+    std::unique_ptr<pipeline::Decoder> decoder = frame ? decoderOrSkip(state, *frame, params) : nullptr;
     if (!decoder) return;
     const FrameView view = viewOf(frame->rendering.image);
     std::vector<pipeline::StageTimings> timings;
@@ -214,8 +218,12 @@ void dpBaseline(benchmark::State& state, FrameSize size)
 
 }  // namespace
 
-BENCHMARK_CAPTURE(decode, 780x580, FrameSize::Small)->Unit(benchmark::kMillisecond);
-BENCHMARK_CAPTURE(decode, 1388x1038, FrameSize::Large)->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(decode, 780x580, FrameSize::Small, false)->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(decode, 1388x1038, FrameSize::Large, false)->Unit(benchmark::kMillisecond);
+// Not decode_rowpairs/: Google Benchmark names a capture function/capture.
+void decodeRowPairs(benchmark::State& state, FrameSize size) { decode(state, size, true); }
+BENCHMARK_CAPTURE(decodeRowPairs, 780x580, FrameSize::Small)->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(decodeRowPairs, 1388x1038, FrameSize::Large)->Unit(benchmark::kMillisecond);
 // stage/<stage>_<size> for the seven stages at both sizes.
 const bool kStageBenchmarksRegistered = [] {
     for (const auto& [size, sizeName] : {std::pair{FrameSize::Small, "780x580"}, std::pair{FrameSize::Large, "1388x1038"}})

@@ -94,14 +94,16 @@ out.append("")
 out.append("| frame | decode ms | target | decode / Sobel BGR | decode / Sobel grey | Sobel BGR ms | Sobel grey ms "
            "| DP ms | DP / decode | points | DP points | workspace B/px |")
 out.append("|---|---|---|---|---|---|---|---|---|---|---|---|")
-for size, target in TARGETS.items():
-    d, sb, sg, dp = get(f"decode/{size}"), get(f"sobel/bgr_{size}"), get(f"sobel/grey_{size}"), get(f"dpBaseline/{size}")
+# The camera's rows, then row pairs (DecoderParams::segmentRowPairs, the fast mode).
+MODES = [("decode", ""), ("decodeRowPairs", ", row pairs")]
+for (name, label), (size, target) in ((m, t) for m in MODES for t in TARGETS.items()):
+    d, sb, sg, dp = get(f"{name}/{size}"), get(f"sobel/bgr_{size}"), get(f"sobel/grey_{size}"), get(f"dpBaseline/{size}")
     t = ms(d)
     verdict = "met" if t <= target else "MISSED"
     ratio = t / ms(sb)
     ratio_note = "" if size != "780x580" else (" (target <= 15: met)" if ratio <= 15 else " (target <= 15: MISSED)")
     bpp = d["bytes_per_pixel"]
-    out.append(f"| {size} | {t:.2f} ({ms(d, 'real_time'):.2f}) | <= {target:g} ms: {verdict} | {ratio:.1f}{ratio_note} "
+    out.append(f"| {size}{label} | {t:.2f} ({ms(d, 'real_time'):.2f}) | <= {target:g} ms: {verdict} | {ratio:.1f}{ratio_note} "
                f"| {t / ms(sg):.1f} | {ms(sb):.3f} | {ms(sg):.3f} | {ms(dp):.1f} | {ms(dp) / t:.2f} "
                f"| {d['points']:.0f} | {dp['points']:.0f} | {bpp:.1f} (<= 32: {'met' if bpp <= 32 else 'MISSED'}) |")
 out.append("")
@@ -110,9 +112,9 @@ out.append("")
 stages = ["gradient", "watershed", "regions", "graph", "edges", "traversal", "depth", "total"]
 out.append("| frame | " + " | ".join(stages) + " | superpixels | graph edges |")
 out.append("|---|" + "---|" * (len(stages) + 2))
-for size in TARGETS:
-    d = get(f"decode/{size}")
-    out.append(f"| {size} | " + " | ".join(f"{d['ms_' + s]:.2f}" for s in stages) +
+for (name, label), size in ((m, s) for m in MODES for s in TARGETS):
+    d = get(f"{name}/{size}")
+    out.append(f"| {size}{label} | " + " | ".join(f"{d['ms_' + s]:.2f}" for s in stages) +
                f" | {d['superpixels']:.0f} | {d['graph_edges']:.0f} |")
 out.append("")
 out.append("Each stage alone (`stage/<stage>_<size>`: Decoder::repeatStage after the earlier stages, which run "

@@ -38,6 +38,22 @@ foreach(f plane.tiff preview.png)
   endif()
 endforeach()
 
+# Row pairs (the fast mode): the plane still has a point per camera row and
+# edge almost everywhere; with --method dp it is a usage error (exit 2).
+run(0 decode --calib ${OUT}/calib.yaml --pattern ${OUT}/pattern.yaml --image ${OUT}/plane.png --ply ${OUT}/pairs.ply
+    --row-pairs --stats)
+if(NOT out MATCHES "decoded .*plane.png: ([0-9]+) points")
+  message(FATAL_ERROR "row pairs: unexpected output: ${out}")
+endif()
+if(CMAKE_MATCH_1 LESS 50000)
+  message(FATAL_ERROR "row pairs: only ${CMAKE_MATCH_1} points on the plane")
+endif()
+run(2 decode --calib ${OUT}/calib.yaml --pattern ${OUT}/pattern.yaml --image ${OUT}/plane.png --ply ${OUT}/x.ply
+    --method dp --row-pairs)
+if(NOT err MATCHES "--row-pairs is for --method graph only")
+  message(FATAL_ERROR "row pairs with dp: unexpected message: ${err}")
+endif()
+
 # A frame of the wrong size: exit 1, both sizes named, no output at all.
 run(1 decode --calib ${OUT}/calib.yaml --pattern ${OUT}/pattern.yaml --image ${OUT}/small.png --ply ${OUT}/small.ply
     --depth ${OUT}/small.tiff)

@@ -297,11 +297,7 @@ TEST(DecoderErrors, RowPairsNeedStripesAlongTheColumns)
     EXPECT_EQ(refused.message(), "decoder: segmentation on row pairs needs stripes along the image columns, but this "
                                  "rig's stripes run along the rows (its baseline is closer to the image's y axis)");
     EXPECT_TRUE(Decoder::create(pattern, vertical));  // the camera's rows segment either way
-
-    params.rowPairNoiseFloorFactor = -1;
-    auto negative = Decoder::create(pattern, horizontal, params);
-    ASSERT_FALSE(negative);
-    EXPECT_NE(negative.message().find("rowPairNoiseFloorFactor"), std::string::npos) << negative.message();
+    EXPECT_TRUE(Decoder::create(pattern, horizontal, params));
 }
 
 TEST(DecoderMemory, WorkspaceStaysUnder34BytesPerPixel)

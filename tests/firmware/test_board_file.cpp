@@ -4,6 +4,8 @@
 #include "firmware/formats/calibration_file.hpp"
 #include "firmware/formats/pattern_file.hpp"
 
+#include "pipeline/decoder.hpp"
+
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -63,13 +65,16 @@ TEST(BoardFile, DefaultsAndRelativePaths)
 
 TEST(BoardFile, DecoderAndSimKeys)
 {
-    auto board = parseBoard(kMinimal + "decoder: {t: 0.25, A: 0.7, min_component_regions: 3}\n"
+    auto board = parseBoard(kMinimal + "decoder: {t: 0.25, A: 0.7, min_component_regions: 3, row_pairs: 1, "
+                                       "noise_floor_factor: 0.9}\n"
                                        "sim: {scene: fan, noise: 8, real_time: true, presses: \"5,10b\"}\n",
                             "b.yaml");
     ASSERT_TRUE(board.isOk()) << board.message();
     EXPECT_DOUBLE_EQ(board->decoder.t, 0.25);
     EXPECT_DOUBLE_EQ(board->decoder.A, 0.7);
     EXPECT_EQ(board->decoder.minComponentRegions, 3);
+    EXPECT_TRUE(board->decoder.segmentRowPairs);
+    EXPECT_DOUBLE_EQ(board->decoder.noiseFloorFactor, 0.9);
     EXPECT_EQ(board->sim.scene, "fan");
     EXPECT_DOUBLE_EQ(board->sim.noise, 8);
     EXPECT_TRUE(board->sim.realTime);
@@ -106,7 +111,7 @@ TEST(BoardFile, ErrorsNameFileAndKey)
 
 TEST(BoardFile, EveryShippedBoardLoadsWithItsCalibrationAndPattern)
 {
-    int boards = 0;
+    int boards = 0, rowPairBoards = 0;
     for (const auto& entry : std::filesystem::directory_iterator(std::string(STRIA_SOURCE_DIR) + "/board")) {
         const std::string path = entry.path().string() + "/board.yaml";
         if (!std::filesystem::exists(path)) continue;
@@ -121,6 +126,11 @@ TEST(BoardFile, EveryShippedBoardLoadsWithItsCalibrationAndPattern)
         ASSERT_TRUE(pattern.isOk()) << pattern.message();
         EXPECT_LE(pattern->projectorColumnsUsed(), rig->projector().width) << path;
         EXPECT_LT(board->settleMs + board->camera.exposureUs / 1000, board->light.maxOnMs) << path;
+        // The decoder section works with this calibration (row pairs need its stripes along the columns).
+        auto decoder = stria::pipeline::Decoder::create(*pattern, *rig, board->decoder);
+        EXPECT_TRUE(decoder.isOk()) << path << ": " << decoder.message();
+        rowPairBoards += board->decoder.segmentRowPairs;
     }
+    EXPECT_GE(rowPairBoards, 1);  // the endoscope's video mode
     EXPECT_GE(boards, 1);
 }
