@@ -28,16 +28,20 @@ trap 'rm -rf "$work"' EXIT
 
 # Scenes chosen to reach every decoder stage: coloured albedo and depth
 # steps (relief), sensor noise on a curved surface (sphere), and the
-# fingerprint rig's own geometry (fingertip).
+# fingerprint rig's own geometry (fingertip); the relief again with the
+# segmentation on row pairs (decode options after a '|').
 status=0
-for case in "relief" "sphere --noise 3 --seed 7" "fingertip --noise 2"; do
-	name=${case%% *}
+for case in "relief" "sphere --noise 3 --seed 7" "fingertip --noise 2" "relief|--row-pairs"; do
+	render=${case%%|*}
+	options=
+	[ "$render" != "$case" ] && options=${case#*|}
+	name=${render%% *}${options:+-rowpairs}
 	dir=$work/$name
 	mkdir "$dir"
-	# shellcheck disable=SC2086 # $case holds the scene and its options
-	"$host" render --scene $case --out "$dir/frame.png" \
+	# shellcheck disable=SC2086 # $render holds the scene and its options
+	"$host" render --scene $render --out "$dir/frame.png" \
 		--calib-out "$dir/calib.yaml" --pattern-out "$dir/pattern.yaml" >/dev/null
-	decode="decode --calib $dir/calib.yaml --pattern $dir/pattern.yaml --image $dir/frame.png --ascii"
+	decode="decode --calib $dir/calib.yaml --pattern $dir/pattern.yaml --image $dir/frame.png --ascii $options"
 	"$host" $decode --ply "$dir/host.ply" >/dev/null
 	$emulator "$arm64" $decode --ply "$dir/arm64.ply" >/dev/null
 
