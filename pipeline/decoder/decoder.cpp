@@ -33,27 +33,11 @@ std::size_t pairLabelEntries(int w, int h)
     return pixels + (3 * pixels + 64 + sizeof(std::int32_t) - 1) / sizeof(std::int32_t);
 }
 
-// The frame averaged in pairs of rows, rounding up (rows 2y and 2y + 1, the
-// last row alone if h is odd): GCC vectorises the loop (pavgb, urhadd).
-FrameView averageRowPairs(const DecoderWorkspace& ws, const FrameView& frame)
-{
-    const int bytes = 3 * frame.width, rows = static_cast<int>(pairRows(frame.height));
-    for (int y = 0; y < rows; ++y) {
-        const std::uint8_t* a = frame.row(2 * y);
-        const std::uint8_t* b = frame.row(std::min(2 * y + 1, frame.height - 1));
-        std::uint8_t* out = ws.pairPixels + static_cast<std::ptrdiff_t>(y) * bytes;
-        for (int i = 0; i < bytes; ++i) out[i] = static_cast<std::uint8_t>((unsigned{a[i]} + unsigned{b[i]} + 1) >> 1);
-    }
-    return {ws.pairPixels, frame.width, rows, bytes, frame.format};
-}
-
 // The frame the stages up to the traversal segment: the camera's, or its row
-// pairs (averaged again only if `average`: the stage benchmarks repeat a
-// later stage on the pairs the gradient stage averaged).
-FrameView segmentationFrame(const DecoderWorkspace& ws, const FrameView& frame, bool average)
+// pairs (which the gradient stage averages into ws.pairPixels as it goes).
+FrameView segmentationFrame(const DecoderWorkspace& ws, const FrameView& frame)
 {
     if (!ws.params.segmentRowPairs) return frame;
-    if (average) return averageRowPairs(ws, frame);
     return {ws.pairPixels, frame.width, ws.height, 3 * static_cast<std::ptrdiff_t>(frame.width), frame.format};
 }
 
@@ -239,7 +223,7 @@ Result<DecodeResult> Decoder::decode(const FrameView& frame)
     StageTimings& t = result.timings;
     const Clock::time_point begin = Clock::now();
     Clock::time_point lap = begin;
-    ws.frame = segmentationFrame(ws, frame, true);  // timed with the gradient
+    ws.frame = segmentationFrame(ws, frame);
     computeGradient(ws);
     t.gradientMs = millisecondsSince(lap);
     computeWatershed(ws);
@@ -275,7 +259,7 @@ Status Decoder::repeatStage(DecoderStage stage, const FrameView& frame)
         return Status::error("repeatStage: the frame is not the one the last decode() decoded");
     DecoderWorkspace& ws = *ws_;
     ws.cameraFrame = frame;
-    ws.frame = stage == DecoderStage::Depth ? frame : segmentationFrame(ws, frame, stage == DecoderStage::Gradient);
+    ws.frame = stage == DecoderStage::Depth ? frame : segmentationFrame(ws, frame);
     switch (stage) {
     case DecoderStage::Gradient: computeGradient(ws); break;
     case DecoderStage::Watershed: computeWatershed(ws); break;

@@ -44,10 +44,11 @@ SceneRun decodeScene(const hal::sim::SimRig& rig, SceneKind kind, Albedo albedo,
     SceneRun run{scoreDecode(result->points, truth, rig), *result, {result->points.begin(), result->points.end()},
                  truth.depth};
     std::printf("[ measured ] %s%s/%s noise %.0f contrast %.2f ambient %.2f: %d points, ideal %d, inliers %.4f of "
-                "ideal, outliers %.4f of points, mean %.4f mm, std %.4f mm, %d superpixels%s\n",
-                params.segmentRowPairs ? "row pairs: " : "", hal::sim::sceneName(kind), hal::sim::albedoName(albedo), settings.noiseSigma, settings.contrast,
-                settings.ambient, run.score.points, run.score.ideal, run.score.inlierRatio(), run.score.outlierRatio(),
-                run.score.meanError, run.score.stdError, result->superpixels, result->truncated ? " (truncated)" : "");
+                "ideal, outliers %.4f of points (%d), mean %.4f mm, std %.4f mm, %d superpixels%s\n",
+                params.segmentRowPairs ? "row pairs: " : "", hal::sim::sceneName(kind), hal::sim::albedoName(albedo),
+                settings.noiseSigma, settings.contrast, settings.ambient, run.score.points, run.score.ideal,
+                run.score.inlierRatio(), run.score.outlierRatio(), run.score.outliers, run.score.meanError,
+                run.score.stdError, result->superpixels, result->truncated ? " (truncated)" : "");
     return run;
 }
 
