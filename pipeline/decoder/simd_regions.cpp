@@ -587,6 +587,29 @@ std::array<std::uint8_t, 3> mediansBody(const std::uint32_t* pixels, int count)
     return channelMediansReference(pixels, count);
 #endif
 }
+
+#if defined(__ARM_NEON) || defined(__SSE2__)
+// The 8 passes of four regions' median search, region j in dword j (of m,
+// its medians so far, and of need): per pass, the four regions' counts at or
+// above their limits from `passCounts(l0, l1, l2, l3)` (each limit in the
+// three bytes of every dword), summed and compared together. The kernels
+// below differ only in how they walk the regions' pixels.
+struct FourCounts {
+    Bytes c0, c1, c2, c3;
+};
+template <class PassCounts>
+[[gnu::always_inline]] inline std::array<std::uint32_t, 4> searchFour(Bytes need, PassCounts passCounts)
+{
+    Bytes m = zeroBytes(), bit = firstBit();
+    for (int pass = 0; pass < 8; ++pass, bit = nextBit(bit)) {
+        const Bytes limits = limitsOf(m, bit);
+        const FourCounts c = passCounts(dwordOf<0>(limits), dwordOf<1>(limits), dwordOf<2>(limits), dwordOf<3>(limits));
+        m = stepOfFour(m, bit, sumsOfFour(c.c0, c.c1, c.c2, c.c3), need);
+    }
+    // Byte 3 of each dword: the search's junk, cleared.
+    return dwords(bitAnd(m, loadBytes(kThreeBytes)));
+}
+#endif
 }  // namespace
 
 std::array<std::uint32_t, 4> channelMediansOfFour(const std::array<const std::uint32_t*, 4>& pixels,
@@ -604,18 +627,11 @@ std::array<std::uint32_t, 4> channelMediansOfFour(const std::array<const std::ui
         // the unsigned divisions of the set-up).
         std::array<ByteSearch, 4> searches;
         for (int j = 0; j < 4; ++j) searches[j] = startSearch(pixels[j], counts[j]);
-        const Bytes need = dwordsOf(needsOfFour(counts));
-        Bytes m = zeroBytes(), bit = firstBit();
-        for (int pass = 0; pass < 8; ++pass, bit = nextBit(bit)) {
-            const Bytes limits = limitsOf(m, bit);
-            const Bytes c0 = passCounts(searches[0], dwordOf<0>(limits));
-            const Bytes c1 = passCounts(searches[1], dwordOf<1>(limits));
-            const Bytes c2 = passCounts(searches[2], dwordOf<2>(limits));
-            const Bytes c3 = passCounts(searches[3], dwordOf<3>(limits));
-            m = stepOfFour(m, bit, sumsOfFour(c0, c1, c2, c3), need);
-        }
-        // Byte 3 of each dword: the search's junk, cleared.
-        return dwords(bitAnd(m, loadBytes(kThreeBytes)));
+        return searchFour(dwordsOf(needsOfFour(counts)), [&](Bytes l0, Bytes l1, Bytes l2, Bytes l3)
+                                                             __attribute__((always_inline)) {
+            return FourCounts{passCounts(searches[0], l0), passCounts(searches[1], l1), passCounts(searches[2], l2),
+                              passCounts(searches[3], l3)};
+        });
     }
 #endif
     std::array<std::uint32_t, 4> medians;
@@ -658,14 +674,10 @@ std::array<std::uint32_t, 4> fourAlikeBody(const std::array<const std::uint32_t*
     // 8 pixels where two blocks of 4 took 6. As below otherwise; the
     // counts per byte lane are the same sums (modulo 256, at most 255).
     const int pairs = (counts[0] + 7) / 8;  // 1-32
-    const Bytes need = dwordsOf(needsOfFour(counts));
     const auto *p0 = reinterpret_cast<const std::uint8_t*>(pixels[0]), *p1 = reinterpret_cast<const std::uint8_t*>(pixels[1]),
                *p2 = reinterpret_cast<const std::uint8_t*>(pixels[2]), *p3 = reinterpret_cast<const std::uint8_t*>(pixels[3]);
-    Bytes m = zeroBytes(), bit = firstBit();
-    for (int pass = 0; pass < 8; ++pass, bit = nextBit(bit)) {
-        const Bytes limits = limitsOf(m, bit);
-        const Bytes l0 = dwordOf<0>(limits), l1 = dwordOf<1>(limits), l2 = dwordOf<2>(limits),
-                    l3 = dwordOf<3>(limits);
+    return searchFour(dwordsOf(needsOfFour(counts)), [&](Bytes l0, Bytes l1, Bytes l2, Bytes l3)
+                                                         __attribute__((always_inline)) {
         Bytes c0 = zeroBytes(), c1 = zeroBytes(), c2 = zeroBytes(), c3 = zeroBytes();
         // Blocks pairs - 1 down to 0 by a jump into straight-line code, as
         // forBlocksDown, over 32 blocks (STRIA_BLOCKS_DOWN_32).
@@ -674,9 +686,8 @@ std::array<std::uint32_t, 4> fourAlikeBody(const std::array<const std::uint32_t*
         STRIA_BLOCKS_DOWN_32(pairs)
 #undef STRIA_STEP
 #undef STRIA_AT_LEAST
-        m = stepOfFour(m, bit, sumsOfFour(c0, c1, c2, c3), need);
-    }
-    return dwords(bitAnd(m, loadBytes(kThreeBytes)));
+        return FourCounts{c0, c1, c2, c3};
+    });
 #elif defined(__ARM_NEON) || defined(__SSE2__)
     // As channelMediansOfFour, the four regions' blocks in one walk per pass:
     // block b of each region in turn, one accumulator per region (four
@@ -686,13 +697,9 @@ std::array<std::uint32_t, 4> fourAlikeBody(const std::array<const std::uint32_t*
     const int blocks = (counts[0] + 3) / 4;
     std::array<const std::uint8_t*, 4> bytes;
     for (int j = 0; j < 4; ++j) bytes[j] = reinterpret_cast<const std::uint8_t*>(pixels[j]);
-    const Bytes need = dwordsOf(needsOfFour(counts));
     const std::uint8_t *p0 = bytes[0], *p1 = bytes[1], *p2 = bytes[2], *p3 = bytes[3];
-    Bytes m = zeroBytes(), bit = firstBit();
-    for (int pass = 0; pass < 8; ++pass, bit = nextBit(bit)) {
-        const Bytes limits = limitsOf(m, bit);
-        const Bytes l0 = dwordOf<0>(limits), l1 = dwordOf<1>(limits), l2 = dwordOf<2>(limits),
-                    l3 = dwordOf<3>(limits);
+    return searchFour(dwordsOf(needsOfFour(counts)), [&](Bytes l0, Bytes l1, Bytes l2, Bytes l3)
+                                                         __attribute__((always_inline)) {
         Bytes c0 = zeroBytes(), c1 = zeroBytes(), c2 = zeroBytes(), c3 = zeroBytes();
         // Inlined in all 64 cases (GCC otherwise calls it from some, its
         // accumulators in memory).
@@ -702,9 +709,8 @@ std::array<std::uint32_t, 4> fourAlikeBody(const std::array<const std::uint32_t*
             c2 = sub(c2, atLeast(p2 + 16 * b, l2));
             c3 = sub(c3, atLeast(p3 + 16 * b, l3));
         });
-        m = stepOfFour(m, bit, sumsOfFour(c0, c1, c2, c3), need);
-    }
-    return dwords(bitAnd(m, loadBytes(kThreeBytes)));
+        return FourCounts{c0, c1, c2, c3};
+    });
 #else
     return channelMediansOfFour(pixels, counts);
 #endif

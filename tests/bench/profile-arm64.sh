@@ -10,6 +10,9 @@
 #   tests/bench/profile-arm64.sh [ARM64_BUILD_DIR] [HOST_STRIA]
 #       (defaults: build/arm64, the arm64 preset; build/host/firmware/stria)
 #
+# PROFILE_DECODE_OPTIONS adds options to the decodes, e.g. --row-pairs for
+# the fast mode (docs/algorithm.md "Row pairs").
+#
 # The same count for an x86-64 build, to check the method against callgrind
 # (tests/bench/profile-stages.sh):
 #   PROFILE_EMULATOR='qemu-x86_64 -cpu max' PROFILE_NM=nm tests/bench/profile-arm64.sh build/host
@@ -80,7 +83,7 @@ for rig in desktop desktop-large; do
         counter=$!
         # shellcheck disable=SC2086 # $emulator may hold options
         $emulator -d in_asm,exec,nochain -D "$dir/log" "$stria" decode --calib "$dir/calib.yaml" \
-            --pattern "$dir/pattern.yaml" --image "$dir/frame.png" --ply "$dir/out.ply" --repeat $repeat \
+            --pattern "$dir/pattern.yaml" --image "$dir/frame.png" --ply "$dir/out.ply" --repeat $repeat ${PROFILE_DECODE_OPTIONS:-} \
             >/dev/null 2>"$dir/qemu.log" || { cat "$dir/qemu.log" >&2; exit 1; }
         wait $counter
         rm "$dir/log"
