@@ -213,6 +213,7 @@ Status Scanner::decodeFrame(const hal::CapturedFrame& frame, ScanRecord& record)
     auto result = decoder_->decode(frame.view);
     if (!result) return result.status().withContext("decoder: ");
     lastDecode_ = *result;
+    record.segmentation = decoder_->params().segmentRowPairs ? "row_pairs" : "rows";
     record.points = static_cast<int>(result->points.size());
     record.superpixels = result->superpixels;
     record.graphEdges = result->graphEdges;

@@ -55,6 +55,7 @@ std::string scanRecordJson(const ScanRecord& r)
     json += "  \"monotonic_ns\": {\"press\": " + bigInteger(r.pressNs) + ", \"led_on\": " + bigInteger(r.ledOnNs) +
             ", \"capture\": " + bigInteger(r.captureNs) + ", \"exposure_start\": " + bigInteger(r.exposureStartNs) +
             ", \"led_off\": " + bigInteger(r.ledOffNs) + ", \"decode_start\": " + bigInteger(r.decodeStartNs) + "},\n";
+    json += "  \"segmentation\": " + quoted(r.segmentation) + ",\n";
     json += "  \"counts\": {\"points\": " + std::to_string(r.points) + ", \"superpixels\": " + std::to_string(r.superpixels) +
             ", \"graph_edges\": " + std::to_string(r.graphEdges) + ", \"decoded_regions\": " +
             std::to_string(r.decodedRegions) + ", \"truncated\": " + std::to_string(r.truncated ? 1 : 0) + "},\n";
@@ -115,6 +116,9 @@ Result<ScanRecord> readScanRecord(const std::string& path)
                      integer(counts, "decoded_regions", r.decodedRegions), integer(counts, "truncated", truncated)}) {
         if (!s) return s.withContext(where);
     }
+    // Records written before the key existed were all decoded on the camera's rows.
+    if (!root["segmentation"].empty())
+        if (Status s = str(root, "segmentation", r.segmentation); !s) return s.withContext(where);
     r.scan = static_cast<std::uint64_t>(scan);
     r.frameSequence = static_cast<std::uint64_t>(frame);
     r.ok = status == "ok";

@@ -30,6 +30,7 @@ struct ScanRecord {
     std::int64_t ledOffNs = 0;         // LED switched off
     std::int64_t decodeStartNs = 0;
 
+    std::string segmentation = "rows";  // the decoder's mode: "rows", or "row_pairs" (DecoderParams::segmentRowPairs)
     int points = 0, superpixels = 0, graphEdges = 0, decodedRegions = 0;
     bool truncated = false;
     pipeline::StageTimings decode;

@@ -86,6 +86,7 @@ TEST(Scanner, ScriptedPressesGiveCompleteResultsMatchingGroundTruth)
     for (const std::string& folder : folders) {
         const ScanRecord record = recordIn(folder);
         EXPECT_TRUE(record.ok) << record.error;
+        EXPECT_EQ(record.segmentation, "rows");
         EXPECT_EQ(record.files, (std::vector<std::string>{"points.ply", "depth.tiff", "preview.png"}));
         auto points = readPly(folder + "/points.ply");
         ASSERT_TRUE(points.isOk()) << points.message();
@@ -122,6 +123,33 @@ TEST(Scanner, ScriptedPressesGiveCompleteResultsMatchingGroundTruth)
         EXPECT_LE(median, 0.5);
         EXPECT_GE(static_cast<double>(inliers), 0.3 * ideal);
     }
+}
+
+// A head whose board asks for the fast mode (decoder.row_pairs): the scan
+// decodes on row pairs, as a direct decode with the same parameters does, and
+// its record says so.
+TEST(Scanner, RowPairsBoardScansInTheFastModeAndRecordsIt)
+{
+    SimHead head({"decoder: {row_pairs: 1}"});
+    ASSERT_TRUE(head.board().decoder.segmentRowPairs);
+    Head run = start(head, "0");
+    ASSERT_TRUE(run.scanner);
+    EXPECT_EQ(run.scanner->run().scans, 1);
+    hal::sim::Rendering truth;
+    ASSERT_TRUE(hal::sim::SceneRenderer(run.world->rig()).render(run.world->scene(), run.world->renderSettings(), truth));
+    auto decoder = pipeline::Decoder::create(run.world->rig().pattern, run.world->rig().rig, head.board().decoder);
+    ASSERT_TRUE(decoder.isOk()) << decoder.message();
+    const auto direct = (*decoder)->decode(FrameView{truth.image.data, truth.image.cols, truth.image.rows,
+                                                     static_cast<std::ptrdiff_t>(truth.image.step)});
+    ASSERT_TRUE(direct.isOk()) << direct.message();
+    const auto folders = scanFolders(head.outDir());
+    ASSERT_EQ(folders.size(), 1u);
+    const ScanRecord record = recordIn(folders[0]);
+    EXPECT_TRUE(record.ok) << record.error;
+    EXPECT_EQ(record.segmentation, "row_pairs");
+    EXPECT_EQ(record.points, static_cast<int>(direct->points.size()));
+    EXPECT_EQ(record.superpixels, direct->superpixels);
+    EXPECT_GE(record.points, 0.3 * hal::sim::idealEdgeCrossings(truth, run.world->rig().pattern));  // as the scans above
 }
 
 TEST(Scanner, BouncingPressGivesOneScan)
