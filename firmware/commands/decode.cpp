@@ -149,9 +149,10 @@ int run(std::span<const std::string> argv)
                     repeat);
     } else if (args.has("stats")) {
         const std::size_t bytes = graph->workspaceBytes();
-        std::printf("superpixels %d, graph edges %d, decoded regions %d, points %zu%s\n", result->superpixels,
-                    result->graphEdges, result->decodedRegions, result->points.size(),
-                    result->truncated ? ", truncated" : "");
+        std::printf("superpixels %d, graph edges %d, decoded regions %d, points %zu%s (segmented on %s)\n",
+                    result->superpixels, result->graphEdges, result->decodedRegions, result->points.size(),
+                    result->truncated ? ", truncated" : "",
+                    graph->params().segmentRowPairs ? "row pairs" : "the camera's rows");
         std::printf("workspace %zu bytes (%.1f bytes/pixel for %dx%d, %s)\n", bytes,
                     static_cast<double>(bytes) / (static_cast<double>(frame.cols) * frame.rows), frame.cols, frame.rows,
                     graph->workspaceHugePagesAdvised() ? "huge pages" : "4 KB pages");
