@@ -489,7 +489,8 @@ STRIA_X86_CLONES void computePoints(DecoderWorkspace& ws)
         // buffers' ends in the last row), harmless for a prefetch, not for
         // a pointer.
         if (y + 1 < h) {
-            const std::uintptr_t nextLabels = reinterpret_cast<std::uintptr_t>(labels + static_cast<std::ptrdiff_t>((y + 1) >> shift) * w);
+            const std::int32_t* const nextLabelRow = labels + static_cast<std::ptrdiff_t>((y + 1) >> shift) * w;
+            const std::uintptr_t nextLabels = reinterpret_cast<std::uintptr_t>(nextLabelRow);
             const std::uintptr_t nextPixels = reinterpret_cast<std::uintptr_t>(ws.frame.row(y + 1));
             for (std::uintptr_t b = 0, p = 0; b < 4u * static_cast<unsigned>(w); b += 512, p += 384) {
                 for (int k = 0; k < 8; ++k) __builtin_prefetch(reinterpret_cast<const void*>(nextLabels + b + 64 * k));

@@ -1,7 +1,8 @@
 // The quality targets of the decoder on simulator scenes (desktopRig 780x580,
 // fixed seeds), each for both segmentations: the camera's rows (FullRows) and
-// row pairs (RowPairs, DecoderParams::segmentRowPairs, the fast mode). Inlier: |error along the ray| <= 1% of the working distance;
-// ideal: idealEdgeCrossings. Each scene is rendered once per test.
+// row pairs (RowPairs, DecoderParams::segmentRowPairs, the fast mode).
+// Inlier: |error along the ray| <= 1% of the working distance; ideal:
+// idealEdgeCrossings. Each scene is rendered once per test.
 // docs/algorithm.md lists each target beside the figure measured here.
 #include "tests/decoder/quality_support.hpp"
 

@@ -136,7 +136,8 @@ TEST(Scanner, RowPairsBoardScansInTheFastModeAndRecordsIt)
     ASSERT_TRUE(run.scanner);
     EXPECT_EQ(run.scanner->run().scans, 1);
     hal::sim::Rendering truth;
-    ASSERT_TRUE(hal::sim::SceneRenderer(run.world->rig()).render(run.world->scene(), run.world->renderSettings(), truth));
+    const hal::sim::SceneRenderer renderer(run.world->rig());
+    ASSERT_TRUE(renderer.render(run.world->scene(), run.world->renderSettings(), truth));
     auto decoder = pipeline::Decoder::create(run.world->rig().pattern, run.world->rig().rig, head.board().decoder);
     ASSERT_TRUE(decoder.isOk()) << decoder.message();
     const auto direct = (*decoder)->decode(FrameView{truth.image.data, truth.image.cols, truth.image.rows,
@@ -149,7 +150,8 @@ TEST(Scanner, RowPairsBoardScansInTheFastModeAndRecordsIt)
     EXPECT_EQ(record.segmentation, "row_pairs");
     EXPECT_EQ(record.points, static_cast<int>(direct->points.size()));
     EXPECT_EQ(record.superpixels, direct->superpixels);
-    EXPECT_GE(record.points, 0.3 * hal::sim::idealEdgeCrossings(truth, run.world->rig().pattern));  // as the scans above
+    // The bound of the scans above.
+    EXPECT_GE(record.points, 0.3 * hal::sim::idealEdgeCrossings(truth, run.world->rig().pattern));
 }
 
 TEST(Scanner, BouncingPressGivesOneScan)
