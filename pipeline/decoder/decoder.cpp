@@ -180,7 +180,6 @@ Result<std::unique_ptr<Decoder>> Decoder::create(const StripePattern& pattern, c
     ws->cameraHeight = h;
     if (params.segmentRowPairs) {
         ws->height = static_cast<int>(pairRows(h));
-        ws->labelRowShift = 1;
         ws->pairPixels = reinterpret_cast<std::uint8_t*>(ws->labels.get() + static_cast<std::size_t>(w) * ws->height);
     }
 

@@ -422,7 +422,7 @@ bool pointsOfBatch(DecoderWorkspace& ws, const RowRays& rays, const double* colu
 STRIA_X86_CLONES void computePoints(DecoderWorkspace& ws)
 {
     // Camera rows; row y's labels and borders are label row y >> shift (row pairs: y / 2).
-    const int w = ws.width, h = ws.cameraHeight, shift = ws.labelRowShift;
+    const int w = ws.width, h = ws.cameraHeight, shift = ws.params.segmentRowPairs ? 1 : 0;
     const Region* regions = ws.regions.get();
     const std::int32_t* labels = ws.labels.get();
     const cv::Matx33f& m = ws.colorCorrection;

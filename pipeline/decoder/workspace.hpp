@@ -97,9 +97,9 @@ struct DecoderWorkspace {
     // The segmentation frame's size: the camera's, or with
     // params.segmentRowPairs its row pairs' (height (cameraHeight + 1) / 2);
     // the stages up to the traversal see only it. The depth stage works on
-    // the camera's rows, camera row y reading label row y >> labelRowShift.
+    // the camera's rows, camera row y reading label row y / 2 with row pairs.
     int width = 0, height = 0;
-    int cameraHeight = 0, labelRowShift = 0;
+    int cameraHeight = 0;
     // With params.segmentRowPairs: the frame averaged in row pairs (BGR or
     // RGB as the input, stride 3 x width), in the labels buffer past the
     // label rows, which then fill (at most) its first half.

@@ -88,7 +88,7 @@ std::unique_ptr<pipeline::Decoder> decoderOrSkip(benchmark::State& state, const 
     return std::move(*decoder);
 }
 
-// rowPairs: DecoderParams::segmentRowPairs (the fast mode), `decode_rowpairs/<size>`.
+// rowPairs: DecoderParams::segmentRowPairs (the fast mode), `decodeRowPairs/<size>`.
 void decode(benchmark::State& state, FrameSize size, bool rowPairs)
 {
     const BenchFrame* frame = frameOrSkip(state, size);

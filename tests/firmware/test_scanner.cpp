@@ -48,6 +48,36 @@ Head start(const SimHead& head, const std::string& presses, bool writeOutputs = 
     return {std::move(*scanner), world};
 }
 
+// The ground truth of the very scene the camera saw, and what the decoder
+// with the board's parameters makes of that frame when called directly: the
+// loop must deliver exactly this (right frame, lit, right calibration).
+struct DirectDecode {
+    hal::sim::Rendering truth;
+    std::size_t points = 0;
+    int superpixels = 0;
+    bool ok = false;
+};
+
+DirectDecode decodeDirectly(const Head& run, const SimHead& head)
+{
+    DirectDecode direct;
+    const hal::sim::SceneRenderer renderer(run.world->rig());
+    const Status rendered = renderer.render(run.world->scene(), run.world->renderSettings(), direct.truth);
+    EXPECT_TRUE(rendered.isOk()) << rendered.message();
+    auto decoder = pipeline::Decoder::create(run.world->rig().pattern, run.world->rig().rig, head.board().decoder);
+    EXPECT_TRUE(decoder.isOk()) << decoder.message();
+    if (!rendered || !decoder) return direct;
+    const hal::sim::Rendering& t = direct.truth;
+    const auto result =
+        (*decoder)->decode(FrameView{t.image.data, t.image.cols, t.image.rows, static_cast<std::ptrdiff_t>(t.image.step)});
+    EXPECT_TRUE(result.isOk()) << result.message();
+    if (!result) return direct;
+    direct.points = result->points.size();
+    direct.superpixels = result->superpixels;
+    direct.ok = true;
+    return direct;
+}
+
 ScanRecord recordIn(const std::string& folder)
 {
     auto record = readScanRecord(folder + "/scan.json");
@@ -67,19 +97,10 @@ TEST(Scanner, ScriptedPressesGiveCompleteResultsMatchingGroundTruth)
     EXPECT_EQ(summary.failed, 0);
     EXPECT_FALSE(summary.stopped);
 
-    // The ground truth of the very scene the camera saw.
-    hal::sim::SceneRenderer renderer(run.world->rig());
-    hal::sim::RenderSettings settings = run.world->renderSettings();
-    hal::sim::Rendering truth;
-    ASSERT_TRUE(renderer.render(run.world->scene(), settings, truth));
+    const DirectDecode direct = decodeDirectly(run, head);
+    ASSERT_TRUE(direct.ok);
+    const hal::sim::Rendering& truth = direct.truth;
     const int ideal = hal::sim::idealEdgeCrossings(truth, run.world->rig().pattern);
-    // What the decoder makes of that frame when called directly: the loop
-    // must deliver exactly this (right frame, lit, right calibration).
-    auto decoder = pipeline::Decoder::create(run.world->rig().pattern, run.world->rig().rig, head.board().decoder);
-    ASSERT_TRUE(decoder.isOk()) << decoder.message();
-    const auto direct = (*decoder)->decode(FrameView{truth.image.data, truth.image.cols, truth.image.rows,
-                                                     static_cast<std::ptrdiff_t>(truth.image.step)});
-    ASSERT_TRUE(direct.isOk()) << direct.message();
 
     const auto folders = scanFolders(head.outDir());
     ASSERT_EQ(folders.size(), 3u);
@@ -91,7 +112,7 @@ TEST(Scanner, ScriptedPressesGiveCompleteResultsMatchingGroundTruth)
         auto points = readPly(folder + "/points.ply");
         ASSERT_TRUE(points.isOk()) << points.message();
         EXPECT_EQ(static_cast<int>(points->size()), record.points);
-        EXPECT_EQ(points->size(), direct->points.size());
+        EXPECT_EQ(points->size(), direct.points);
         auto depth = readTiffFloat(folder + "/depth.tiff");
         ASSERT_TRUE(depth.isOk()) << depth.message();
         EXPECT_EQ(depth->size(), cv::Size(780, 580));
@@ -135,23 +156,17 @@ TEST(Scanner, RowPairsBoardScansInTheFastModeAndRecordsIt)
     Head run = start(head, "0");
     ASSERT_TRUE(run.scanner);
     EXPECT_EQ(run.scanner->run().scans, 1);
-    hal::sim::Rendering truth;
-    const hal::sim::SceneRenderer renderer(run.world->rig());
-    ASSERT_TRUE(renderer.render(run.world->scene(), run.world->renderSettings(), truth));
-    auto decoder = pipeline::Decoder::create(run.world->rig().pattern, run.world->rig().rig, head.board().decoder);
-    ASSERT_TRUE(decoder.isOk()) << decoder.message();
-    const auto direct = (*decoder)->decode(FrameView{truth.image.data, truth.image.cols, truth.image.rows,
-                                                     static_cast<std::ptrdiff_t>(truth.image.step)});
-    ASSERT_TRUE(direct.isOk()) << direct.message();
+    const DirectDecode direct = decodeDirectly(run, head);
+    ASSERT_TRUE(direct.ok);
     const auto folders = scanFolders(head.outDir());
     ASSERT_EQ(folders.size(), 1u);
     const ScanRecord record = recordIn(folders[0]);
     EXPECT_TRUE(record.ok) << record.error;
     EXPECT_EQ(record.segmentation, "row_pairs");
-    EXPECT_EQ(record.points, static_cast<int>(direct->points.size()));
-    EXPECT_EQ(record.superpixels, direct->superpixels);
+    EXPECT_EQ(record.points, static_cast<int>(direct.points));
+    EXPECT_EQ(record.superpixels, direct.superpixels);
     // The bound of the scans above.
-    EXPECT_GE(record.points, 0.3 * hal::sim::idealEdgeCrossings(truth, run.world->rig().pattern));
+    EXPECT_GE(record.points, 0.3 * hal::sim::idealEdgeCrossings(direct.truth, run.world->rig().pattern));
 }
 
 TEST(Scanner, BouncingPressGivesOneScan)
